@@ -1,0 +1,124 @@
+/*
+ * mcdem C ABI: the multi-contact contact physics of mcdem (Rust), for the LIGGGHTS shim and any
+ * other C/C++ caller. Link with the static library built by `cargo build --release`
+ * (target/release/libmcdem.a) plus -lpthread -ldl -lm.
+ *
+ * Conventions: SI units; every function returns MCDEM_OK (0) or an error code, and
+ * mcdem_last_error() gives the message of the last failure on this thread. No function aborts
+ * or unwinds into the caller.
+ */
+#ifndef MCDEM_H
+#define MCDEM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MCDEM_OK 0
+#define MCDEM_ERR_NULL 1        /* a required pointer was null */
+#define MCDEM_ERR_PARAMETER 2   /* a parameter is out of range; the message names it */
+#define MCDEM_ERR_NON_FINITE 3  /* an input or result is NaN or infinite */
+#define MCDEM_ERR_OVERLAP 4     /* the overlap reached a particle radius */
+#define MCDEM_ERR_COINCIDENT 5  /* coincident centres: no contact normal */
+#define MCDEM_ERR_INTERNAL 6    /* internal error (a bug: please report) */
+
+#define MCDEM_CAP_NONE 0   /* standard MC (Brodu et al. 2015, Eq. 2) */
+#define MCDEM_CAP_ABS 1    /* advanced MC, |delta_k->c| > MPR r trips (default) */
+#define MCDEM_CAP_SIGNED 2 /* advanced MC, delta_k->c > MPR r trips (App. A literal) */
+
+/* Particle-side parameters of the multi-contact kernel. */
+typedef struct mcdem_mc_params {
+    double radius;         /* original radius r_i [m] */
+    double youngs_modulus; /* particle's own E [Pa] */
+    double poisson_ratio;  /* particle's own nu, in [0, 0.5] */
+    double gamma;          /* geometric prefactor, >= 0 */
+    double mpr;            /* maximum penetration ratio, >= 0 (read when cap != NONE) */
+    int32_t cap;           /* MCDEM_CAP_* */
+} mcdem_mc_params;
+
+/* One contact of a particle. */
+typedef struct mcdem_contact_load {
+    double point[3]; /* contact point relative to the particle centre [m] */
+    double force;    /* normal force magnitude at the previous step [N] */
+} mcdem_contact_load;
+
+/* Pair coefficients (App. C). */
+typedef struct mcdem_pair_coeffs {
+    double e_star;   /* effective Young's modulus [Pa] */
+    double g_star;   /* effective shear modulus [Pa] */
+    double beta;     /* ln e / sqrt(ln^2 e + pi^2) */
+    double friction; /* Coulomb coefficient */
+} mcdem_pair_coeffs;
+
+/* Output of the Hertz normal sub-model. */
+typedef struct mcdem_normal_force {
+    double force;   /* k_n delta - gamma_n v_n [N] */
+    double elastic; /* k_n delta [N] */
+    double kn;      /* [N/m] */
+    double kt;      /* [N/m] */
+    double gamma_n; /* [kg/s] */
+    double gamma_t; /* [kg/s] */
+} mcdem_normal_force;
+
+/* Kinematic state of a body. */
+typedef struct mcdem_body {
+    double x[3];
+    double v[3];
+    double omega[3];
+    double radius; /* original radius [m] */
+    double mass;   /* [kg] */
+} mcdem_body;
+
+/* Result of a contact force evaluation. */
+typedef struct mcdem_contact_force {
+    double force_i[3];  /* force on i [N]; on j it is the negative */
+    double torque_i[3]; /* [N m] */
+    double torque_j[3]; /* [N m]; zero for walls */
+    double en[3];       /* unit normal from j (or wall) to i */
+    double point[3];    /* contact point [m] */
+    double overlap;     /* effective overlap [m] */
+    double normal_force;/* signed normal force [N] */
+    int32_t in_contact; /* 1 in contact, 0 otherwise (everything else zero) */
+} mcdem_contact_force;
+
+/* Validates one particle type's parameters (call once at setup). */
+int32_t mcdem_validate_mc_params(const mcdem_mc_params *params);
+
+/* Radius change delta[c] [m] at each of the n contacts (Eq. 2, Eq. 3 cap when params->cap != NONE);
+ * hertz_fallback[c] = 1 where the cap switched contact c back to Hertz. n_fallback may be null. */
+int32_t mcdem_radius_changes(const mcdem_mc_params *params, const mcdem_contact_load *contacts,
+                             size_t n, double *delta, uint8_t *hertz_fallback, size_t *n_fallback);
+
+/* Pair coefficients from two materials, restitution e in (0, 1] and friction mu >= 0. */
+int32_t mcdem_pair_coeffs_new(double youngs_i, double poisson_i, double youngs_j, double poisson_j,
+                              double restitution, double friction, mcdem_pair_coeffs *out);
+
+/* Hertz normal sub-model for overlap delta [m] (<= 0 gives zero), effective radius and mass,
+ * normal relative velocity vn = (v_i - v_j).n [m/s]. */
+int32_t mcdem_hertz_normal(const mcdem_pair_coeffs *coeffs, double delta, double reff, double meff,
+                           double vn, mcdem_normal_force *out);
+
+/* Particle-particle force with radius changes dri, drj [m]; shear[3] is the tangential history. */
+int32_t mcdem_particle_particle(const mcdem_pair_coeffs *coeffs, const mcdem_body *bi,
+                                const mcdem_body *bj, double dri, double drj, double dt,
+                                double *shear, mcdem_contact_force *out);
+
+/* Particle-wall force; wall_point[3] is the closest wall point, wall_velocity[3] its velocity. */
+int32_t mcdem_particle_wall(const mcdem_pair_coeffs *coeffs, const mcdem_body *bi,
+                            const double *wall_point, const double *wall_velocity, double dri,
+                            double dt, double *shear, mcdem_contact_force *out);
+
+/* Copies the last error message (NUL-terminated, truncated to len); returns its full length. */
+size_t mcdem_last_error(char *buf, size_t len);
+
+/* Library version string. */
+const char *mcdem_version(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MCDEM_H */

@@ -1,0 +1,62 @@
+//! Standard multi-contact displacement: Brodu, Dijksman & Behringer, Phys. Rev. E 91, 032201
+//! (2015), as written in Ghods et al. (2022) Eq. 2.
+//!
+//! Sign convention (SPEC §2): `n_k`, `n_c` are the **inward** unit normals of the particle at the
+//! contact points (from the contact point toward the centre). With inward normals Eq. 2 is
+//! Boussinesq's half-space point-load displacement projected on `n_c` (Johnson, Contact Mechanics,
+//! eq. 3.22), which is also what LIGGGHTS `fix multicontact/halfspace` implements.
+
+use super::Vec3;
+
+/// Contacts closer than this (chord length, m) are treated as the same point and skipped: the
+/// half-space kernel is singular there and the local Hertz term already accounts for the load.
+pub const MIN_CHORD: f64 = 1e-10;
+
+/// Below this value of `1 + n_k·u_kc` the third term of Eq. 2 is dropped (0/0 when the chord runs
+/// straight along the load direction; on a sphere this never happens since there it equals 1 + s ≥ 1).
+pub const MIN_DENOMINATOR: f64 = 1e-6;
+
+/// The curly bracket of Eq. 2, B(n_k, n_c, u_kc; ν), for unit vectors.
+#[inline]
+pub fn bracket(n_k: &Vec3, n_c: &Vec3, u_kc: &Vec3, nu: f64) -> f64 {
+    let nk_u = n_k.dot(u_kc);
+    let nc_u = n_c.dot(u_kc);
+    let nk_nc = n_k.dot(n_c);
+    let denom = 1.0 + nk_u;
+    let third =
+        if denom > MIN_DENOMINATOR { (1.0 - 2.0 * nu) * (nk_nc + u_kc.dot(n_c)) / denom } else { 0.0 };
+    nk_u * nc_u + (3.0 - 4.0 * nu) * nk_nc - third
+}
+
+/// Eq. 2 bracket for two contacts on one sphere, as a function of s = sin(α/2) where α is the
+/// angle between the contacts: B(s) = 2(1−ν) + 2(1−2ν)s − (7−8ν)s² (SPEC §2).
+/// B(0) = 2(1−ν) (Boussinesq), B(1) = 2ν − 3 (antipodal contacts: the radius grows).
+#[inline]
+pub fn bracket_on_sphere(s: f64, nu: f64) -> f64 {
+    2.0 * (1.0 - nu) + 2.0 * (1.0 - 2.0 * nu) * s - (7.0 - 8.0 * nu) * s * s
+}
+
+/// Prefactor of Eq. 2 without the bracket and the chord: −γ(1+ν) / (2π E). Multiply by F_k / d_kc
+/// and by the bracket to get δ_{k→c}. Hoisted so the per-particle kernel computes it once.
+#[inline]
+pub fn compliance_prefactor(gamma: f64, youngs_modulus: f64, nu: f64) -> f64 {
+    -gamma * (1.0 + nu) / (2.0 * std::f64::consts::PI * youngs_modulus)
+}
+
+/// Eq. 2: displacement of the particle surface at contact c caused by the normal force `f_k`
+/// (magnitude, N) at contact k. `p_k`, `p_c` are the contact points relative to the particle centre
+/// (m). Positive means the radius grows at c. Returns 0 for coincident contacts (chord below
+/// [`MIN_CHORD`]) or a non-positive force.
+#[inline]
+pub fn displacement(p_k: &Vec3, p_c: &Vec3, f_k: f64, gamma: f64, youngs_modulus: f64, nu: f64) -> f64 {
+    let chord = p_c - p_k;
+    let d = chord.norm();
+    let (lk, lc) = (p_k.norm(), p_c.norm());
+    if d < MIN_CHORD || f_k <= 0.0 || lk <= 0.0 || lc <= 0.0 {
+        return 0.0;
+    }
+    let u = chord / d;
+    let n_k = -p_k / lk;
+    let n_c = -p_c / lc;
+    compliance_prefactor(gamma, youngs_modulus, nu) * f_k / d * bracket(&n_k, &n_c, &u, nu)
+}

@@ -1,0 +1,125 @@
+//! Hertz normal force with viscous damping and the history tangential force with Coulomb
+//! truncation: Ghods et al. (2022) Eqs. 5–6 and App. C, identical to LIGGGHTS
+//! `pair_style gran model hertz tangential history` (SPEC §1).
+//!
+//! Two sub-models in the LAMMPS GRANULAR manner: [`normal`] gives the normal force and the
+//! stiffness/damping coefficients that [`tangential_history`] then reads.
+
+use super::material::PairCoeffs;
+use super::Vec3;
+
+/// √(5/6), the constant of Eqs. C.2 and C.7.
+const SQRT_FIVE_SIXTHS: f64 = 0.912_870_929_175_276_8;
+
+/// Output of the normal sub-model for one contact.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct NormalForce {
+    /// Total normal force F_n = k_n δ − γ_n v_n [N]; positive pushes the bodies apart. It can be
+    /// negative at the end of a fast separation (viscous pull), exactly as in LIGGGHTS without `limitForce`.
+    pub force: f64,
+    /// Elastic part k_n δ [N].
+    pub elastic: f64,
+    /// k_n = (4/3) E* √(R δ) [N/m] (Eq. C.1 times √(Rδ), Eq. 5).
+    pub kn: f64,
+    /// k_t = 8 G* √(R δ) [N/m] (Eq. C.6 times √(Rδ)).
+    pub kt: f64,
+    /// γ_n = −2 √(5/6) β √(S_n m_eff) [kg/s] (Eq. C.2; ≥ 0 because β ≤ 0).
+    pub gamma_n: f64,
+    /// γ_t = −2 √(5/6) β √(S_t m_eff) [kg/s] (Eq. C.7).
+    pub gamma_t: f64,
+}
+
+/// Effective radius R_eff = r_i r_j / (r_i + r_j) (Eq. 5); for a wall pass `None` and get r_i.
+#[inline]
+pub fn effective_radius(ri: f64, rj: Option<f64>) -> f64 {
+    match rj {
+        Some(rj) => ri * rj / (ri + rj),
+        None => ri,
+    }
+}
+
+/// Effective mass m_eff = m_i m_j / (m_i + m_j); for a wall pass `None` and get m_i.
+#[inline]
+pub fn effective_mass(mi: f64, mj: Option<f64>) -> f64 {
+    match mj {
+        Some(mj) => mi * mj / (mi + mj),
+        None => mi,
+    }
+}
+
+/// Normal sub-model (Eq. 5, App. C). `delta` is the overlap [m] (already including the
+/// multi-contact radius changes), `vn = (v_i − v_j)·n` the normal relative velocity [m/s]
+/// (negative when approaching). A non-positive overlap gives no force: with the multi-contact
+/// radius changes the effective overlap can turn non-positive while the bodies still touch
+/// geometrically, and the right answer then is "no contact", not an abort.
+#[inline]
+pub fn normal(c: &PairCoeffs, delta: f64, reff: f64, meff: f64, vn: f64) -> NormalForce {
+    if delta <= 0.0 {
+        return NormalForce::default();
+    }
+    let sqrtval = (reff * delta).sqrt();
+    let sn = 2.0 * c.e_star * sqrtval;
+    let st = 8.0 * c.g_star * sqrtval;
+    let kn = 4.0 / 3.0 * c.e_star * sqrtval;
+    let gamma_n = -2.0 * SQRT_FIVE_SIXTHS * c.beta * (sn * meff).sqrt();
+    let gamma_t = -2.0 * SQRT_FIVE_SIXTHS * c.beta * (st * meff).sqrt();
+    let elastic = kn * delta;
+    NormalForce { force: elastic - gamma_n * vn, elastic, kn, kt: st, gamma_n, gamma_t }
+}
+
+/// Closed-form Hertz force of an undamped contact, F = (4/3) E* √R δ^{3/2}: the analytic limit
+/// tests and the static reference compare against.
+#[inline]
+pub fn hertz_force(e_star: f64, reff: f64, delta: f64) -> f64 {
+    if delta <= 0.0 {
+        0.0
+    } else {
+        4.0 / 3.0 * e_star * reff.sqrt() * delta.powf(1.5)
+    }
+}
+
+/// Inverse of [`hertz_force`]: the overlap that carries force `f` ≥ 0.
+#[inline]
+pub fn hertz_overlap(e_star: f64, reff: f64, f: f64) -> f64 {
+    if f <= 0.0 {
+        0.0
+    } else {
+        (3.0 * f / (4.0 * e_star * reff.sqrt())).powf(2.0 / 3.0)
+    }
+}
+
+/// History tangential sub-model (Eq. 6, App. C; LIGGGHTS `tangential history`).
+///
+/// `shear` is the contact's elastic tangential displacement ξ [m], updated in place: ξ += v_t,rel dt,
+/// projected on the tangent plane of `en`; F_t = −k_t ξ; if |F_t| > μ|F_n| it is scaled to μ|F_n|
+/// and ξ = −F_t/k_t, otherwise the damping −γ_t v_t,rel is added. Returns F_t on body i [N].
+/// With μ = 0 the result is exactly zero and ξ is reset, so callers may skip the call entirely.
+#[inline]
+pub fn tangential_history(
+    shear: &mut Vec3,
+    vtr: &Vec3,
+    en: &Vec3,
+    dt: f64,
+    normal: &NormalForce,
+    friction: f64,
+) -> Vec3 {
+    *shear += vtr * dt;
+    let rsht = shear.dot(en);
+    *shear -= en * rsht;
+    let shrmag = shear.norm();
+    let kt = normal.kt;
+    let mut ft = -kt * *shear;
+    let ft_shear = kt * shrmag;
+    let ft_friction = friction * normal.force.abs();
+    if ft_shear > ft_friction {
+        if shrmag != 0.0 {
+            ft *= ft_friction / ft_shear;
+            *shear = -ft / kt;
+        } else {
+            ft = Vec3::zeros();
+        }
+    } else {
+        ft -= normal.gamma_t * vtr;
+    }
+    ft
+}

@@ -1,0 +1,122 @@
+//! Materials as data: per-type elastic constants and multi-contact parameters, per-pair
+//! restitution and friction, validated once so the hot path never sees a bad value.
+
+use std::fmt;
+
+use super::ghods2022::{Cap, MprTest};
+
+/// Per-type material of a particle (SI units).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Material {
+    /// Young's modulus E [Pa], > 0.
+    pub youngs_modulus: f64,
+    /// Poisson ratio ν [-], in [0, 0.5] (0.5, incompressible, is valid: the paper's hydrogel).
+    pub poisson_ratio: f64,
+    /// Geometric prefactor γ of Eq. 2 [-], ≥ 0. γ = 0 switches the multi-contact correction off.
+    pub gamma: f64,
+    /// Advanced-MC cap (Eq. 3); `None` is standard MC (Eq. 2 without a cap).
+    pub cap: Option<Cap>,
+}
+
+/// A parameter that failed validation: names the parameter and the offending value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialError {
+    pub parameter: &'static str,
+    pub value: f64,
+    pub requirement: &'static str,
+}
+
+impl fmt::Display for MaterialError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "invalid {} = {}: must be {}", self.parameter, self.value, self.requirement)
+    }
+}
+
+impl std::error::Error for MaterialError {}
+
+/// Checks one parameter; `ok` is evaluated only for finite values.
+pub(crate) fn check(
+    parameter: &'static str,
+    value: f64,
+    requirement: &'static str,
+    ok: impl Fn(f64) -> bool,
+) -> Result<f64, MaterialError> {
+    if value.is_finite() && ok(value) {
+        Ok(value)
+    } else {
+        Err(MaterialError { parameter, value, requirement })
+    }
+}
+
+pub(crate) fn check_youngs_modulus(e: f64) -> Result<f64, MaterialError> {
+    check("youngs_modulus", e, "finite and > 0", |v| v > 0.0)
+}
+
+pub(crate) fn check_poisson_ratio(nu: f64) -> Result<f64, MaterialError> {
+    check("poisson_ratio", nu, "finite and in [0, 0.5]", |v| (0.0..=0.5).contains(&v))
+}
+
+pub(crate) fn check_gamma(gamma: f64) -> Result<f64, MaterialError> {
+    check("gamma (geometricPrefactor)", gamma, "finite and >= 0", |v| v >= 0.0)
+}
+
+pub(crate) fn check_mpr(mpr: f64) -> Result<f64, MaterialError> {
+    check("mpr (maxPenetrationRatio)", mpr, "finite and >= 0", |v| v >= 0.0)
+}
+
+impl Material {
+    /// Validated constructor. `mpr = None` gives standard MC.
+    pub fn new(
+        youngs_modulus: f64,
+        poisson_ratio: f64,
+        gamma: f64,
+        mpr: Option<(f64, MprTest)>,
+    ) -> Result<Self, MaterialError> {
+        let cap = match mpr {
+            Some((m, test)) => Some(Cap { mpr: check_mpr(m)?, test }),
+            None => None,
+        };
+        Ok(Self {
+            youngs_modulus: check_youngs_modulus(youngs_modulus)?,
+            poisson_ratio: check_poisson_ratio(poisson_ratio)?,
+            gamma: check_gamma(gamma)?,
+            cap,
+        })
+    }
+
+    /// Hertz-only material (no multi-contact correction).
+    pub fn hertz(youngs_modulus: f64, poisson_ratio: f64) -> Result<Self, MaterialError> {
+        Self::new(youngs_modulus, poisson_ratio, 0.0, None)
+    }
+}
+
+/// Coefficients of one type pair, precomputed once (App. C, Eqs. C.3, C.4, C.8).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairCoeffs {
+    /// Effective Young's modulus E* [Pa] (Eq. C.3).
+    pub e_star: f64,
+    /// Effective shear modulus G* [Pa] (Eq. C.8).
+    pub g_star: f64,
+    /// β = ln e / √(ln²e + π²) [-] (Eq. C.4 with the square root the paper's typesetting dropped).
+    pub beta: f64,
+    /// Coulomb friction coefficient μ [-].
+    pub friction: f64,
+}
+
+impl PairCoeffs {
+    /// Builds the pair coefficients from two materials, the pair's coefficient of restitution
+    /// e ∈ (0, 1] and friction μ ≥ 0. A rigid wall is a material with its own E and ν (LIGGGHTS
+    /// convention: walls are atom types too).
+    pub fn new(mi: &Material, mj: &Material, restitution: f64, friction: f64) -> Result<Self, MaterialError> {
+        let e =
+            check("coefficientRestitution", restitution, "finite and in (0, 1]", |v| v > 0.0 && v <= 1.0)?;
+        let mu = check("coefficientFriction", friction, "finite and >= 0", |v| v >= 0.0)?;
+        let (ei, ni) = (mi.youngs_modulus, mi.poisson_ratio);
+        let (ej, nj) = (mj.youngs_modulus, mj.poisson_ratio);
+        let e_star = 1.0 / ((1.0 - ni * ni) / ei + (1.0 - nj * nj) / ej);
+        let g_star = 1.0 / (2.0 * (2.0 - ni) * (1.0 + ni) / ei + 2.0 * (2.0 - nj) * (1.0 + nj) / ej);
+        let ln_e = e.ln();
+        let beta = ln_e / (ln_e * ln_e + std::f64::consts::PI * std::f64::consts::PI).sqrt();
+        Ok(Self { e_star, g_star, beta, friction: mu })
+    }
+}

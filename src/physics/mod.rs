@@ -1,0 +1,28 @@
+//! The contact-physics core: every engine in mcdem (the LIGGGHTS plugin through the C ABI, the
+//! standalone DEM, the nonlocal reference) calls these functions and nothing else for contact forces.
+//!
+//! One file per published model, named after the paper, so a reader finds the formula where the
+//! citation is:
+//! - [`hertz`]: Hertz normal force with viscous damping and the history tangential force
+//!   (Ghods et al. 2022, App. C; identical to LIGGGHTS `hertz tangential history`).
+//! - [`brodu2015`]: the standard multi-contact displacement (Brodu et al. 2015; Ghods et al. Eq. 2).
+//! - [`ghods2022`]: the advanced multi-contact switch (Ghods et al. Eq. 3 and App. A).
+//! - [`contact_set`]: the per-particle kernel that applies Eq. 2 (and Eq. 3) to all contacts of one particle.
+//! - [`pair`]: contact geometry computed once, then the normal and tangential sub-models, for
+//!   particle–particle and particle–wall contacts alike.
+//!
+//! Pure functions on plain data: no I/O and no allocation in the hot paths.
+
+pub mod brodu2015;
+pub mod contact_set;
+pub mod ghods2022;
+pub mod hertz;
+pub mod material;
+pub mod pair;
+
+/// 3-vector used throughout the core (SI units).
+pub type Vec3 = nalgebra::Vector3<f64>;
+
+pub use contact_set::{ContactLoad, ContactSetKernel, McParams};
+pub use ghods2022::{Cap, MprTest};
+pub use material::{Material, MaterialError, PairCoeffs};

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The mcdem test command: installs what the tests need on a fresh Debian machine (idempotent,
+# non-interactive: LIGGGHTS and its headers from apt, MPI, libclang for bindgen), then runs
+# formatting, lints and the whole test suite. `.ci/run` calls exactly this script.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+APT_PACKAGES=(liggghts libliggghts-dev liggghts-doc mpi-default-dev libclang-dev clang)
+
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "mcdem tests: installing ${missing[*]}"
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q "${missing[@]}"
+fi
+
+cargo fmt --check
+cargo clippy --release --all-targets -- -D warnings
+cargo test --release
