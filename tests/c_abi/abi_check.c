@@ -1,0 +1,68 @@
+/* Compiled against native/mcdem.h and linked with libmcdem.a by tests/c_abi.rs: if the header and
+ * the library drift apart (names, argument lists, struct layouts), this stops compiling, linking
+ * or printing the values the Rust side expects. Prints "key value" lines. */
+#include <stdio.h>
+#include <string.h>
+#include "mcdem.h"
+
+static void print_error(const char *key, int32_t code) {
+    char buf[256];
+    size_t n = mcdem_last_error(buf, sizeof buf);
+    printf("%s_code %d\n%s_len %zu\n%s_msg %s\n", key, code, key, n, key, buf);
+}
+
+int main(void) {
+    printf("sizeof_mc_params %zu\nsizeof_contact_load %zu\nsizeof_body %zu\nsizeof_contact_force %zu\n",
+           sizeof(mcdem_mc_params), sizeof(mcdem_contact_load), sizeof(mcdem_body),
+           sizeof(mcdem_contact_force));
+    printf("version %s\n", mcdem_version());
+
+    mcdem_pair_coeffs c;
+    int32_t rc = mcdem_pair_coeffs_new(23.3e3, 0.5, 23.3e3, 0.5, 0.95, 0.03, &c);
+    printf("coeffs_rc %d\ne_star %.17g\ng_star %.17g\nbeta %.17g\n", rc, c.e_star, c.g_star, c.beta);
+
+    mcdem_normal_force nf;
+    rc = mcdem_hertz_normal(&c, 1e-4, 5e-4, 2e-6, -0.01, &nf);
+    printf("normal_rc %d\nnormal_force %.17g\nnormal_kt %.17g\n", rc, nf.force, nf.kt);
+
+    mcdem_mc_params p = {1e-3, 23.3e3, 0.5, 0.81, 0.11, MCDEM_CAP_ABS};
+    mcdem_contact_load cs[3] = {
+        {{0.0, 0.0, -0.95e-3}, 1.2e-3}, {{0.0, 0.0, 0.95e-3}, 1.2e-3}, {{0.95e-3, 0.0, 0.0}, 0.0}};
+    double delta[3];
+    uint8_t fb[3];
+    size_t nfb = 99;
+    rc = mcdem_radius_changes(&p, cs, 3, delta, fb, &nfb);
+    printf("kernel_rc %d\ndelta0 %.17g\ndelta1 %.17g\ndelta2 %.17g\nfb %d %d %d\nn_fallback %zu\n", rc,
+           delta[0], delta[1], delta[2], fb[0], fb[1], fb[2], nfb);
+
+    mcdem_body bi = {{0.0, 0.0, 1.9e-3}, {0.0, 0.01, -0.01}, {1.0, 2.0, 3.0}, 1e-3, 4e-6};
+    mcdem_body bj = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 1e-3, 4e-6};
+    double shear[3] = {0.0, 0.0, 0.0};
+    mcdem_contact_force f;
+    rc = mcdem_particle_particle(&c, &bi, &bj, 1e-5, -1e-5, 1e-5, shear, &f);
+    printf("pair_rc %d\nforce_z %.17g\nforce_y %.17g\ntorque_x %.17g\nshear_y %.17g\nin_contact %d\n", rc,
+           f.force_i[2], f.force_i[1], f.torque_i[0], shear[1], f.in_contact);
+
+    double wp[3] = {0.0, 0.0, 0.0}, wv[3] = {0.0, 0.0, 0.0};
+    mcdem_body bw = {{0.0, 0.0, 0.9e-3}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 1e-3, 4e-6};
+    double sw[3] = {0.0, 0.0, 0.0};
+    rc = mcdem_particle_wall(&c, &bw, wp, wv, 0.0, 1e-5, sw, &f);
+    printf("wall_rc %d\nwall_force_z %.17g\n", rc, f.force_i[2]);
+
+    /* Error paths: a message naming the parameter, never a crash. */
+    print_error("bad_nu", mcdem_pair_coeffs_new(23.3e3, 0.7, 23.3e3, 0.5, 0.95, 0.03, &c));
+    mcdem_mc_params bad = p;
+    bad.gamma = -1.0;
+    print_error("bad_gamma", mcdem_validate_mc_params(&bad));
+    bad = p;
+    bad.mpr = -0.1;
+    print_error("bad_mpr", mcdem_radius_changes(&bad, cs, 3, delta, fb, NULL));
+    bad = p;
+    bad.cap = 7;
+    print_error("bad_cap", mcdem_validate_mc_params(&bad));
+    print_error("null", mcdem_radius_changes(&p, NULL, 3, delta, fb, NULL));
+    mcdem_body deep = bw;
+    deep.x[2] = 0.1e-3; /* 0.1 mm from the wall with a grown radius: overlap 1.1 r */
+    print_error("deep", mcdem_particle_wall(&c, &deep, wp, wv, 0.2e-3, 1e-5, sw, &f));
+    return 0;
+}

@@ -1,0 +1,196 @@
+//! Property tests of the contact core over random finite inputs: the kernel and the pair force
+//! never give NaN or infinity (coincident and antipodal contacts, ν = 0.5, zero forces included),
+//! the cap limits hold exactly, and the pair force obeys Newton's third law and torque balance.
+
+use mcdem::physics::brodu2015::{bracket_on_sphere, compliance_prefactor};
+use mcdem::physics::contact_set::{radius_changes, ContactLoad, McParams};
+use mcdem::physics::ghods2022::{Cap, MprTest};
+use mcdem::physics::material::{Material, PairCoeffs};
+use mcdem::physics::pair::{particle_particle, particle_wall, Body, WallPoint};
+use mcdem::physics::Vec3;
+use proptest::prelude::*;
+
+const R: f64 = 1e-3;
+
+/// A direction on the unit sphere; a few fixed ones make antipodal and coincident pairs common.
+fn direction() -> impl Strategy<Value = Vec3> {
+    prop_oneof![
+        Just(Vec3::new(0.0, 0.0, 1.0)),
+        Just(Vec3::new(0.0, 0.0, -1.0)),
+        Just(Vec3::new(1.0, 0.0, 0.0)),
+        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64)
+            .prop_filter("non-zero", |(x, y, z)| x * x + y * y + z * z > 1e-6)
+            .prop_map(|(x, y, z)| Vec3::new(x, y, z).normalize()),
+    ]
+}
+
+fn contact() -> impl Strategy<Value = ContactLoad> {
+    (direction(), 0.5..1.0f64, prop_oneof![Just(0.0), 0.0..1e-2f64])
+        .prop_map(|(d, depth, force)| ContactLoad { point: d * depth * R, force })
+}
+
+fn params() -> impl Strategy<Value = McParams> {
+    (
+        prop_oneof![Just(0.5), Just(0.0), 0.0..=0.5f64],
+        0.0..3.0f64,
+        prop_oneof![Just(None), (0.0..2.0f64).prop_map(Some)],
+        any::<bool>(),
+    )
+        .prop_map(|(nu, gamma, mpr, signed)| McParams {
+            radius: R,
+            youngs_modulus: 23.3e3,
+            poisson_ratio: nu,
+            gamma,
+            cap: mpr.map(|mpr| Cap { mpr, test: if signed { MprTest::Signed } else { MprTest::Abs } }),
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+    #[test]
+    fn kernel_is_always_finite(p in params(), cs in prop::collection::vec(contact(), 0..16)) {
+        let mut d = vec![f64::NAN; cs.len()];
+        let mut fb = vec![true; cs.len()];
+        let s = radius_changes(&p, &cs, &mut d, &mut fb).unwrap();
+        prop_assert!(d.iter().all(|v| v.is_finite()));
+        prop_assert_eq!(s.fallbacks, fb.iter().filter(|f| **f).count());
+        // A contact switched to Hertz has no correction at all.
+        for (dv, f) in d.iter().zip(&fb) {
+            if *f { prop_assert_eq!(*dv, 0.0); }
+        }
+    }
+
+    #[test]
+    fn mpr_zero_is_hertz_and_large_mpr_is_standard(p in params(), cs in prop::collection::vec(contact(), 0..12)) {
+        let n = cs.len();
+        let run = |cap| {
+            let mut d = vec![0.0; n];
+            let mut fb = vec![false; n];
+            radius_changes(&McParams { cap, ..p }, &cs, &mut d, &mut fb).unwrap();
+            d
+        };
+        let standard = run(None);
+        let zero = run(Some(Cap { mpr: 0.0, test: MprTest::Abs }));
+        prop_assert!(zero.iter().all(|v| *v == 0.0), "MPR = 0 must give no correction: {:?}", zero);
+        prop_assert_eq!(run(Some(Cap { mpr: 1e9, test: MprTest::Abs })), standard.clone());
+        prop_assert_eq!(run(Some(Cap { mpr: 1e9, test: MprTest::Signed })), standard);
+    }
+
+    #[test]
+    fn kernel_does_not_depend_on_contact_order(p in params(), cs in prop::collection::vec(contact(), 2..10), rot in 1usize..9) {
+        let n = cs.len();
+        let mut rotated = cs.clone();
+        rotated.rotate_left(rot % n);
+        let (mut d1, mut f1) = (vec![0.0; n], vec![false; n]);
+        let (mut d2, mut f2) = (vec![0.0; n], vec![false; n]);
+        radius_changes(&p, &cs, &mut d1, &mut f1).unwrap();
+        radius_changes(&p, &rotated, &mut d2, &mut f2).unwrap();
+        d1.rotate_left(rot % n);
+        f1.rotate_left(rot % n);
+        prop_assert_eq!(f1, f2);
+        for (a, b) in d1.iter().zip(&d2) {
+            prop_assert!((a - b).abs() <= 1e-12 * a.abs().max(1e-30));
+        }
+    }
+
+    #[test]
+    fn two_contacts_on_a_sphere_match_b_of_s(nu in 0.0..=0.5f64, alpha in 0.01..std::f64::consts::PI, f in 1e-6..1e-2f64) {
+        // Independent closed form: δ = −γ(1+ν)F/(2πE · 2r s) · B(s), s = sin(α/2), d = 2 r s.
+        let p = McParams { radius: R, youngs_modulus: 23.3e3, poisson_ratio: nu, gamma: 1.0, cap: None };
+        let cs = [
+            ContactLoad { point: Vec3::new(0.0, 0.0, R), force: f },
+            ContactLoad { point: Vec3::new(R * alpha.sin(), 0.0, R * alpha.cos()), force: 0.0 },
+        ];
+        let (mut d, mut fb) = ([0.0; 2], [false; 2]);
+        radius_changes(&p, &cs, &mut d, &mut fb).unwrap();
+        let s = (alpha / 2.0).sin();
+        let scale = compliance_prefactor(1.0, 23.3e3, nu) * f / (2.0 * R * s);
+        let expected = scale * bracket_on_sphere(s, nu);
+        // Tolerance relative to the size of the bracket's terms (B itself crosses zero near 70°–82°).
+        prop_assert!((d[1] - expected).abs() <= 1e-12 * scale.abs(), "{} vs {}", d[1], expected);
+        prop_assert_eq!(d[0], 0.0);
+    }
+
+    #[test]
+    fn pair_force_newton_and_torque_balance(
+        nu in 0.0..=0.5f64, e in 0.05..=1.0f64, mu in prop_oneof![Just(0.0), 0.0..2.0f64],
+        dir in direction(), gap in 0.0..0.3f64,
+        vi in prop::array::uniform3(-1.0..1.0f64), wi in prop::array::uniform3(-100.0..100.0f64),
+        wj in prop::array::uniform3(-100.0..100.0f64), sh in prop::array::uniform3(-1e-4..1e-4f64),
+        dri in -1e-4..1e-4f64, drj in -1e-4..1e-4f64,
+    ) {
+        let m = Material::hertz(23.3e3, nu).unwrap();
+        let c = PairCoeffs::new(&m, &m, e, mu).unwrap();
+        let bj = Body { x: Vec3::new(0.1, -0.2, 0.3), v: Vec3::zeros(), omega: Vec3::from(wj), radius: 1.2 * R, mass: 7e-6 };
+        let bi = Body { x: bj.x + dir * (2.2 * R - gap * R), v: Vec3::from(vi), omega: Vec3::from(wi), radius: R, mass: 4e-6 };
+        let mut shear = Vec3::from(sh);
+        if let Some(f) = particle_particle(&c, &bi, &bj, dri, drj, 1e-5, &mut shear).unwrap() {
+            prop_assert!(f.force_i.iter().chain(f.torque_i.iter()).chain(f.torque_j.iter()).all(|v| v.is_finite()));
+            // Angular momentum about the origin is conserved by the pair: τ_i + τ_j + (x_i − x_j) × F_i = 0.
+            let l = f.torque_i + f.torque_j + (bi.x - bj.x).cross(&f.force_i);
+            prop_assert!(l.norm() <= 1e-12 * (f.force_i.norm() * R).max(1e-300));
+            // Coulomb: the tangential part never exceeds μ|F_n| (plus round-off) once truncated.
+            let ft = f.force_i - f.en * f.force_i.dot(&f.en);
+            prop_assert!(ft.norm() <= mu * f.normal.force.abs() * (1.0 + 1e-12) + f.normal.gamma_t * 2e3);
+        }
+    }
+
+    #[test]
+    fn wall_force_is_finite_and_normal_without_friction(nu in 0.0..=0.5f64, depth in 0.0..0.9f64, dri in -1e-4..1e-4f64) {
+        let m = Material::hertz(23.3e3, nu).unwrap();
+        let w = Material::hertz(5e7, 0.5).unwrap();
+        let c = PairCoeffs::new(&m, &w, 0.95, 0.0).unwrap();
+        let b = Body { x: Vec3::new(0.0, 0.0, R * (1.0 - depth)), v: Vec3::new(0.0, 0.0, -0.01), omega: Vec3::new(1.0, 0.0, 0.0), radius: R, mass: 4e-6 };
+        let wall = WallPoint { point: Vec3::zeros(), velocity: Vec3::zeros() };
+        if let Ok(Some(f)) = particle_wall(&c, &b, &wall, dri, 1e-5, &mut Vec3::zeros()) {
+            prop_assert!(f.force_i.iter().all(|v| v.is_finite()));
+            prop_assert!(f.force_i.x == 0.0 && f.force_i.y == 0.0 && f.force_i.z > 0.0);
+        }
+    }
+}
+
+#[test]
+fn overlap_beyond_radius_is_an_error_not_a_force() {
+    let m = Material::hertz(23.3e3, 0.5).unwrap();
+    let c = PairCoeffs::new(&m, &m, 0.95, 0.03).unwrap();
+    let bj = Body { x: Vec3::zeros(), v: Vec3::zeros(), omega: Vec3::zeros(), radius: R, mass: 4e-6 };
+    let bi = Body { x: Vec3::new(0.0, 0.0, 0.9 * R), ..bj };
+    let e = particle_particle(&c, &bi, &bj, 0.0, 0.0, 1e-5, &mut Vec3::zeros()).unwrap_err();
+    assert!(e.to_string().contains("reached the particle radius"), "{e}");
+    let same = particle_particle(&c, &bj, &bj, 0.0, 0.0, 1e-5, &mut Vec3::zeros()).unwrap_err();
+    assert!(same.to_string().contains("coincident"), "{same}");
+}
+
+#[test]
+fn shrunk_radii_turn_a_geometric_overlap_into_no_contact() {
+    // Stock LIGGGHTS multicontact aborts with `sidata.deltan < 0!` here; the core reports no contact.
+    let m = Material::hertz(23.3e3, 0.5).unwrap();
+    let c = PairCoeffs::new(&m, &m, 0.95, 0.03).unwrap();
+    let bj = Body { x: Vec3::zeros(), v: Vec3::zeros(), omega: Vec3::zeros(), radius: R, mass: 4e-6 };
+    let bi = Body { x: Vec3::new(0.0, 0.0, 1.99 * R), ..bj };
+    let mut shear = Vec3::new(1e-6, 0.0, 0.0);
+    assert!(particle_particle(&c, &bi, &bj, -0.02 * R, 0.0, 1e-5, &mut shear).unwrap().is_none());
+    assert_eq!(shear, Vec3::zeros(), "history is cleared when the contact opens");
+}
+
+#[test]
+fn invalid_materials_name_the_parameter() {
+    let cases: [(f64, f64, f64, Option<f64>, &str); 6] = [
+        (0.0, 0.3, 1.0, None, "youngs_modulus"),
+        (1e4, 0.51, 1.0, None, "poisson_ratio"),
+        (1e4, -0.01, 1.0, None, "poisson_ratio"),
+        (1e4, 0.3, -1.0, None, "gamma"),
+        (1e4, 0.3, 1.0, Some(-0.1), "mpr"),
+        (f64::NAN, 0.3, 1.0, None, "youngs_modulus"),
+    ];
+    for (e, nu, g, mpr, name) in cases {
+        let err = Material::new(e, nu, g, mpr.map(|m| (m, MprTest::Abs))).unwrap_err();
+        assert!(err.to_string().contains(name), "{err} should name {name}");
+    }
+    assert!(Material::new(1e4, 0.5, 0.81, Some((0.11, MprTest::Abs))).is_ok(), "ν = 0.5 is valid");
+    let m = Material::hertz(1e4, 0.3).unwrap();
+    assert!(PairCoeffs::new(&m, &m, 0.0, 0.1).unwrap_err().to_string().contains("coefficientRestitution"));
+    assert!(PairCoeffs::new(&m, &m, 1.2, 0.1).unwrap_err().to_string().contains("coefficientRestitution"));
+    assert!(PairCoeffs::new(&m, &m, 0.9, -0.1).unwrap_err().to_string().contains("coefficientFriction"));
+}
