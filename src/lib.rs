@@ -9,3 +9,4 @@ pub mod checks;
 pub mod contacts_cli;
 pub mod ffi;
 pub mod physics;
+pub mod validate;

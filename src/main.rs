@@ -25,6 +25,9 @@ enum Command {
         /// Quick subset (CI)
         #[arg(long)]
         quick: bool,
+        /// Run only this case (repeatable); default: all
+        #[arg(long = "case", value_name = "NAME")]
+        cases: Vec<String>,
         /// Output directory
         #[arg(long, default_value = "validation/report")]
         out: PathBuf,
@@ -47,31 +50,24 @@ fn contacts(file: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn validate(_quick: bool, out: PathBuf) -> Result<(), String> {
-    let checks = mcdem::checks::run_all();
-    println!("{:<20} {:>12} {:>12}  {:<6} what", "check", "error", "tolerance", "result");
-    for c in &checks {
-        let verdict = if c.passed { "pass" } else { "FAIL" };
-        println!("{:<20} {:>12.3e} {:>12.3e}  {:<6} {}", c.name, c.error, c.tolerance, verdict, c.what);
+fn validate(quick: bool, cases: Vec<String>, out: PathBuf) -> Result<(), String> {
+    let opts = mcdem::validate::Options { quick, out: out.clone() };
+    let results = mcdem::validate::run(&opts, &cases)?;
+    let failed: Vec<_> = results.iter().filter(|r| !r.passed).map(|r| r.name).collect();
+    println!("{} passed, {} failed", results.len() - failed.len(), failed.len());
+    println!("report: {}", out.join("report.md").display());
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!("validation case(s) failed: {}", failed.join(", ")))
     }
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    let path = out.join("physics_checks.json");
-    let json = serde_json::to_string_pretty(&checks).map_err(|e| e.to_string())?;
-    std::fs::write(&path, json).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    let failed = checks.iter().filter(|c| !c.passed).count();
-    println!("{} passed, {} failed", checks.len() - failed, failed);
-    println!("wrote {}", path.display());
-    if failed > 0 {
-        return Err(format!("{failed} physics check(s) failed"));
-    }
-    Ok(())
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Contacts { file } => contacts(&file),
-        Command::Validate { quick, out } => validate(quick, out),
+        Command::Validate { quick, cases, out } => validate(quick, cases, out),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,158 @@
+//! `mcdem validate`: runs the validation cases and writes the report.
+//!
+//! Output contract in the report directory:
+//! - `<case>.csv`: long form, columns `case,model,params,x_name,x,quantity,value`;
+//! - `summary.json`: per case and model `nrmse` (against the reference where defined),
+//!   `wall_time_s`, `particle_steps_per_s`, plus whether the case passed;
+//! - `report.md`: one section per case with its tables and notes.
+
+pub mod hard_cases;
+pub mod physics;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+/// One value of the long-form CSV.
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    pub case: &'static str,
+    pub model: String,
+    pub params: String,
+    pub x_name: String,
+    pub x: f64,
+    pub quantity: String,
+    pub value: f64,
+}
+
+/// Per-model figures of merit of one case.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelSummary {
+    pub model: String,
+    /// NRMSE against the case's reference, where the case has one.
+    pub nrmse: Option<f64>,
+    pub wall_time_s: f64,
+    /// Particle-steps per second for dynamic runs; `None` for static or kernel-level cases.
+    pub particle_steps_per_s: Option<f64>,
+}
+
+/// Everything a case produced.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct CaseResult {
+    pub name: &'static str,
+    pub title: String,
+    pub passed: bool,
+    #[serde(skip)]
+    pub rows: Vec<Row>,
+    pub models: Vec<ModelSummary>,
+    /// Markdown body of the case's report section (tables, notes).
+    #[serde(skip)]
+    pub markdown: String,
+    pub wall_time_s: f64,
+}
+
+/// A validation case: a name users pass to `--case` and the function that runs it.
+pub struct Case {
+    pub name: &'static str,
+    pub run: fn(&Options) -> Result<CaseResult, String>,
+}
+
+/// Options of one `validate` invocation.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub quick: bool,
+    pub out: PathBuf,
+}
+
+/// Every case, in report order.
+pub fn cases() -> Vec<Case> {
+    vec![
+        Case { name: "physics_checks", run: physics::run },
+        Case { name: "hard_cases", run: hard_cases::run },
+    ]
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn write_csv(path: &Path, rows: &[Row]) -> Result<(), String> {
+    let mut s = String::from("case,model,params,x_name,x,quantity,value\n");
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{:e},{},{:e}",
+            r.case,
+            csv_field(&r.model),
+            csv_field(&r.params),
+            csv_field(&r.x_name),
+            r.x,
+            csv_field(&r.quantity),
+            r.value
+        );
+    }
+    std::fs::write(path, s).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// Runs the selected cases (all when `only` is empty) and writes the report files.
+pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
+    let all = cases();
+    for name in only {
+        if !all.iter().any(|c| c.name == name) {
+            let known: Vec<_> = all.iter().map(|c| c.name).collect();
+            return Err(format!("unknown case '{name}': known cases are {}", known.join(", ")));
+        }
+    }
+    std::fs::create_dir_all(&opts.out).map_err(|e| format!("cannot create {}: {e}", opts.out.display()))?;
+    let start = Instant::now();
+    let mut results = Vec::new();
+    for case in all.iter().filter(|c| only.is_empty() || only.iter().any(|n| n == c.name)) {
+        eprintln!("validate: running {}", case.name);
+        let t = Instant::now();
+        let mut r = (case.run)(opts)?;
+        r.wall_time_s = t.elapsed().as_secs_f64();
+        write_csv(&opts.out.join(format!("{}.csv", case.name)), &r.rows)?;
+        eprintln!(
+            "validate: {} {} in {:.1} s",
+            case.name,
+            if r.passed { "passed" } else { "FAILED" },
+            r.wall_time_s
+        );
+        results.push(r);
+    }
+    let total = start.elapsed().as_secs_f64();
+    let summary = serde_json::json!({
+        "quick": opts.quick,
+        "total_wall_time_s": total,
+        "cases": results,
+    });
+    let path = opts.out.join("summary.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let mut md = format!(
+        "# mcdem validation report\n\nMode: {}. Total wall time: {total:.1} s. mcdem {}.\n\n| case | result | wall time [s] |\n|---|---|---|\n",
+        if opts.quick { "quick" } else { "full" },
+        env!("CARGO_PKG_VERSION")
+    );
+    for r in &results {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.2} |",
+            r.name,
+            if r.passed { "pass" } else { "FAIL" },
+            r.wall_time_s
+        );
+    }
+    for r in &results {
+        let _ = write!(md, "\n## {}: {}\n\n{}\n", r.name, r.title, r.markdown);
+    }
+    let path = opts.out.join("report.md");
+    std::fs::write(&path, md).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(results)
+}
