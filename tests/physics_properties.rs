@@ -2,7 +2,7 @@
 //! never give NaN or infinity (coincident and antipodal contacts, ν = 0.5, zero forces included),
 //! the cap limits hold exactly, and the pair force obeys Newton's third law and torque balance.
 
-use mcdem::physics::brodu2015::{bracket_on_sphere, compliance_prefactor};
+use mcdem::physics::brodu2015::{bracket_on_sphere, compliance_prefactor, displacement};
 use mcdem::physics::contact_set::{radius_changes, ContactLoad, McParams};
 use mcdem::physics::ghods2022::{Cap, MprTest};
 use mcdem::physics::material::{Material, PairCoeffs};
@@ -46,7 +46,8 @@ fn params() -> impl Strategy<Value = McParams> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+    // A fixed seed keeps CI reproducible; widen the search locally with PROPTEST_CASES.
+    #![proptest_config(ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(0x6d63_6465_6d), ..ProptestConfig::default() })]
 
     #[test]
     fn kernel_is_always_finite(p in params(), cs in prop::collection::vec(contact(), 0..16)) {
@@ -86,11 +87,22 @@ proptest! {
         let (mut d2, mut f2) = (vec![0.0; n], vec![false; n]);
         radius_changes(&p, &cs, &mut d1, &mut f1).unwrap();
         radius_changes(&p, &rotated, &mut d2, &mut f2).unwrap();
+        // Round-off bound of a sum in another order: ε times the sum of the terms' magnitudes,
+        // each term computed independently with Eq. 2 (`displacement`).
+        let threshold = p.loaded_threshold();
+        let scale: Vec<f64> = cs.iter().enumerate().map(|(c, cc)| {
+            cs.iter().enumerate().filter(|(k, ck)| *k != c && ck.force > threshold)
+                .map(|(_, ck)| displacement(&ck.point, &cc.point, ck.force, p.gamma, p.youngs_modulus, p.poisson_ratio).abs())
+                .sum()
+        }).collect();
         d1.rotate_left(rot % n);
         f1.rotate_left(rot % n);
+        let mut scale = scale;
+        scale.rotate_left(rot % n);
+        // Each term is bitwise the same in any order, so the cap decisions are identical.
         prop_assert_eq!(f1, f2);
-        for (a, b) in d1.iter().zip(&d2) {
-            prop_assert!((a - b).abs() <= 1e-12 * a.abs().max(1e-30));
+        for ((a, b), s) in d1.iter().zip(&d2).zip(&scale) {
+            prop_assert!((a - b).abs() <= 1e-13 * s, "{} vs {} (scale {})", a, b, s);
         }
     }
 

@@ -8,6 +8,7 @@
 
 pub mod hard_cases;
 pub mod physics;
+pub mod plot;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

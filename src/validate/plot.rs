@@ -1,0 +1,165 @@
+//! PNG charts for the validation report (plotters with an embedded DejaVu font, so plotting needs
+//! no system fonts).
+
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::prelude::*;
+
+/// One curve or point set.
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+    /// Draw markers instead of a line.
+    pub markers: bool,
+    /// Dashed look (drawn thinner), e.g. for a second quantity of the same model.
+    pub thin: bool,
+}
+
+/// A 2-D chart description.
+pub struct Chart<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub log_x: bool,
+    pub log_y: bool,
+    pub series: Vec<Series>,
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(0, 0, 0),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(140, 86, 75),
+    RGBColor(23, 190, 207),
+];
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // Registration only fails on an unparsable font; the embedded one parses.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
+fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return if log { (1e-3, 1.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        (lo / 1.5, hi * 1.5)
+    } else {
+        let pad = if hi > lo { 0.05 * (hi - lo) } else { 0.5 * lo.abs().max(1e-12) };
+        (lo - pad, hi + pad)
+    }
+}
+
+/// Tick text: plain decimals in the everyday range, scientific notation outside it.
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || (1e-2..1e4).contains(&a) {
+        format!("{v:.3}").trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+fn err<E: std::fmt::Debug>(e: E) -> String {
+    format!("plot: {e:?}")
+}
+
+/// Draws `chart` into a 900×600 PNG at `path`.
+pub fn draw(path: &Path, chart: &Chart) -> Result<(), String> {
+    register_font();
+    let (w, h) = (900u32, 600u32);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let xs = range(chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)), chart.log_x);
+        let ys = range(chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), chart.log_y);
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(chart.title, ("sans-serif", 22))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(80);
+        // plotters types differ per axis kind, so the four combinations are spelled out.
+        macro_rules! body {
+            ($ctx:expr) => {{
+                let mut ctx = $ctx;
+                ctx.configure_mesh()
+                    .x_desc(chart.x_label)
+                    .y_desc(chart.y_label)
+                    .x_label_formatter(&|v| tick(*v))
+                    .y_label_formatter(&|v| tick(*v))
+                    .draw()
+                    .map_err(err)?;
+                for (i, s) in chart.series.iter().enumerate() {
+                    let color = PALETTE[i % PALETTE.len()];
+                    let width = if s.thin { 1 } else { 2 };
+                    let pts: Vec<(f64, f64)> = s
+                        .points
+                        .iter()
+                        .copied()
+                        .filter(|p| {
+                            p.0.is_finite()
+                                && p.1.is_finite()
+                                && (!chart.log_x || p.0 > 0.0)
+                                && (!chart.log_y || p.1 > 0.0)
+                        })
+                        .collect();
+                    if s.markers {
+                        ctx.draw_series(pts.iter().map(|p| Circle::new(*p, 5, color.filled())))
+                            .map_err(err)?
+                            .label(s.label.clone())
+                            .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+                    } else {
+                        ctx.draw_series(LineSeries::new(pts, color.stroke_width(width)))
+                            .map_err(err)?
+                            .label(s.label.clone())
+                            .legend(move |(x, y)| {
+                                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                            });
+                    }
+                }
+                ctx.configure_series_labels()
+                    .position(SeriesLabelPosition::UpperLeft)
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .draw()
+                    .map_err(err)?;
+            }};
+        }
+        match (chart.log_x, chart.log_y) {
+            (false, false) => body!(builder.build_cartesian_2d(xs.0..xs.1, ys.0..ys.1).map_err(err)?),
+            (true, false) => {
+                body!(builder.build_cartesian_2d((xs.0..xs.1).log_scale(), ys.0..ys.1).map_err(err)?)
+            }
+            (false, true) => {
+                body!(builder.build_cartesian_2d(xs.0..xs.1, (ys.0..ys.1).log_scale()).map_err(err)?)
+            }
+            (true, true) => {
+                body!(builder
+                    .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
+                    .map_err(err)?)
+            }
+        }
+        root.present().map_err(err)?;
+    }
+    let file = std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header()
+        .and_then(|mut wr| wr.write_image_data(&buf))
+        .map_err(|e| format!("cannot encode {}: {e}", path.display()))
+}
