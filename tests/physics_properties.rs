@@ -47,7 +47,7 @@ fn params() -> impl Strategy<Value = McParams> {
 
 proptest! {
     // A fixed seed keeps CI reproducible; widen the search locally with PROPTEST_CASES.
-    #![proptest_config(ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(0x6d63_6465_6d), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(0x006d_6364_656d), ..ProptestConfig::default() })]
 
     #[test]
     fn kernel_is_always_finite(p in params(), cs in prop::collection::vec(contact(), 0..16)) {

@@ -7,7 +7,7 @@
 
 use std::fmt;
 
-use super::brodu2015::{bracket, compliance_prefactor, MIN_CHORD};
+use super::brodu2015::{bracket_pair, compliance_prefactor, MIN_CHORD};
 use super::ghods2022::Cap;
 use super::material::{
     check, check_gamma, check_mpr, check_poisson_ratio, check_youngs_modulus, Material, MaterialError,
@@ -226,12 +226,12 @@ pub fn radius_changes(
             if d < MIN_CHORD || na == Vec3::zeros() || nb == Vec3::zeros() {
                 continue;
             }
-            let u_ab = chord / d;
+            let (b_ab, b_ba) = bracket_pair(&na, &nb, &(chord / d), nu);
             if a_loaded {
-                add(b, pref * fa / d * bracket(&na, &nb, &u_ab, nu), delta, hertz_fallback);
+                add(b, pref * fa / d * b_ab, delta, hertz_fallback);
             }
             if b_loaded {
-                add(a, pref * fb / d * bracket(&nb, &na, &(-u_ab), nu), delta, hertz_fallback);
+                add(a, pref * fb / d * b_ba, delta, hertz_fallback);
             }
         }
     }
