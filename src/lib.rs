@@ -7,5 +7,7 @@
 
 pub mod checks;
 pub mod contacts_cli;
+pub mod deck;
+pub mod engine;
 pub mod ffi;
 pub mod physics;
