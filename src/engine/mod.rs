@@ -163,6 +163,9 @@ struct WallContact {
     velocity: Vec3,
     shear: Vec3,
     fn_prev: f64,
+    /// Contact point relative to the centre at the previous step (LIGGGHTS `surfPos`): the
+    /// multi-contact pass reads it, as LIGGGHTS does; zero for a contact seen for the first time.
+    rel_prev: Vec3,
     dr: f64,
 }
 
@@ -452,8 +455,10 @@ impl World {
                     j,
                     shear: Vec3::zeros(),
                     fn_prev: 0.0,
-                    ri_prev: self.p.radius[i as usize],
-                    rj_prev: self.p.radius[j as usize],
+                    // LIGGGHTS starts a pair's history at zero radii: the contact point sits at
+                    // the centre and receives no multi-contact term until the pair is evaluated.
+                    ri_prev: 0.0,
+                    rj_prev: 0.0,
                     dri: 0.0,
                     drj: 0.0,
                 },
@@ -494,6 +499,7 @@ impl World {
                                     velocity: Vec3::zeros(),
                                     shear: Vec3::zeros(),
                                     fn_prev: 0.0,
+                                    rel_prev: Vec3::zeros(),
                                     dr: 0.0,
                                 },
                             );
@@ -521,6 +527,7 @@ impl World {
                                                 velocity: m.velocity,
                                                 shear: Vec3::zeros(),
                                                 fn_prev: 0.0,
+                                                rel_prev: Vec3::zeros(),
                                                 dr: 0.0,
                                             },
                                         );
@@ -599,7 +606,6 @@ impl World {
             if s1 - s0 < 2 || !self.loaded[i] {
                 continue;
             }
-            let eps_i = eps(i, self);
             self.loads.clear();
             for s in &self.slots[s0..s1] {
                 let (point, force) = match *s {
@@ -628,14 +634,7 @@ impl World {
                     }
                     Slot::Wall(k) => {
                         let c = &self.wc[k as usize];
-                        let mut rel = c.point - self.p.x[i];
-                        if c.fn_prev <= eps_i {
-                            let l = rel.norm();
-                            if l > 0.0 {
-                                rel *= self.p.radius[i] / l;
-                            }
-                        }
-                        (rel, c.fn_prev)
+                        (c.rel_prev, c.fn_prev)
                     }
                 };
                 self.loads.push(ContactLoad { point, force });
@@ -681,8 +680,13 @@ impl World {
             self.p.f[i] = Vec3::zeros();
             self.p.torque[i] = Vec3::zeros();
         }
-        for m in &mut self.meshes {
-            m.force = Vec3::zeros();
+        // LIGGGHTS does not clear the mesh force before the set-up pass, so the first thermo line
+        // of a run shows the previous step's force plus the set-up force; do the same so the
+        // outputs match line by line (the dynamics never read this sum).
+        if update {
+            for m in &mut self.meshes {
+                m.force = Vec3::zeros();
+            }
         }
         self.update_wall_contacts();
         let mc = self.closure == Some(Closure::MultiContact);
@@ -780,6 +784,17 @@ impl World {
             if update {
                 c.shear = shear;
                 c.fn_prev = fnorm;
+                let rel = c.point - self.p.x[i];
+                c.rel_prev = if fnorm > 0.0 {
+                    rel
+                } else {
+                    let l = rel.norm();
+                    if l > 0.0 {
+                        rel * ((self.p.radius[i] + c.dr) / l)
+                    } else {
+                        Vec3::zeros()
+                    }
+                };
             }
         }
         Ok(())
@@ -885,6 +900,7 @@ fn push_merge(out: &mut Vec<WallContact>, old: &[WallContact], k: &mut usize, mu
         if o.key() == key {
             c.shear = o.shear;
             c.fn_prev = o.fn_prev;
+            c.rel_prev = o.rel_prev;
         }
     }
     out.push(c);
