@@ -357,8 +357,6 @@ impl Deck {
         if let (base, Some(k)) = split_index(name)? {
             let i =
                 w.p.id.iter().position(|&x| x == k as i64).ok_or_else(|| format!("no atom with id {k}"))?;
-            let col = Col::parse(base).ok_or_else(|| unsupported(&format!("atom value {name}")))?;
-            let _ = col;
             let p = &w.p;
             return Ok(match base {
                 "x" => p.x[i].x,
@@ -592,7 +590,7 @@ impl Deck {
         }
         let lo = Vec3::new(b[0], b[2], b[4]);
         let hi = Vec3::new(b[1], b[3], b[5]);
-        if (0..3).any(|k| !(hi[k] > lo[k])) {
+        if (0..3).any(|k| hi[k].partial_cmp(&lo[k]) != Some(std::cmp::Ordering::Greater)) {
             return Err("box bounds must have hi > lo".into());
         }
         self.world.domain = Some(Domain { lo, hi, periodic: self.periodic });
@@ -605,11 +603,10 @@ impl Deck {
             .map_err(|e| format!("cannot read data file {}: {e}", path.display()))?;
         let mut b = [0.0; 6];
         let mut natoms = 0usize;
-        let mut lines = text.lines().skip(1).peekable();
+        let lines = text.lines().skip(1);
         let mut section = "";
-        let mut n_in_section = 0usize;
         let mut vel_seen = false;
-        while let Some(l) = lines.next() {
+        for l in lines {
             let l = strip_comment(l).trim();
             if l.is_empty() {
                 continue;
@@ -624,11 +621,9 @@ impl Deck {
                 ["Atoms", ..] => {
                     self.set_box(b)?;
                     section = "Atoms";
-                    n_in_section = 0;
                 }
                 ["Velocities"] => {
                     section = "Velocities";
-                    n_in_section = 0;
                     vel_seen = true;
                 }
                 [word, ..] if word.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) => {
@@ -637,51 +632,46 @@ impl Deck {
                         path.display()
                     )));
                 }
-                _ => {
-                    n_in_section += 1;
-                    match section {
-                        "Atoms" => {
-                            if t.len() < 7 {
-                                return Err(format!(
-                                    "{}: Atoms line needs id type diameter density x y z: \"{l}\"",
-                                    path.display()
-                                ));
-                            }
-                            let id = int(t[0])?;
-                            let typ = int(t[1])? as usize;
-                            if typ < 1 || typ > self.ntypes {
-                                return Err(format!(
-                                    "{}: atom {id} has type {typ} outside 1..{}",
-                                    path.display(),
-                                    self.ntypes
-                                ));
-                            }
-                            let x = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
-                            self.world.p.push(id, typ - 1, x, num(t[2])?, num(t[3])?);
-                            if t.len() >= 10 {
-                                let i = self.world.p.len() - 1;
-                                self.world.p.image[i] =
-                                    [int(t[7])? as i32, int(t[8])? as i32, int(t[9])? as i32];
-                            }
+                _ => match section {
+                    "Atoms" => {
+                        if t.len() < 7 {
+                            return Err(format!(
+                                "{}: Atoms line needs id type diameter density x y z: \"{l}\"",
+                                path.display()
+                            ));
                         }
-                        "Velocities" => {
-                            if t.len() < 7 {
-                                return Err(format!(
-                                    "{}: Velocities line needs id vx vy vz wx wy wz",
-                                    path.display()
-                                ));
-                            }
-                            let id = int(t[0])?;
-                            let i = self.index_of(id)?;
-                            self.world.p.v[i] = Vec3::new(num(t[1])?, num(t[2])?, num(t[3])?);
-                            self.world.p.omega[i] = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
+                        let id = int(t[0])?;
+                        let typ = int(t[1])? as usize;
+                        if typ < 1 || typ > self.ntypes {
+                            return Err(format!(
+                                "{}: atom {id} has type {typ} outside 1..{}",
+                                path.display(),
+                                self.ntypes
+                            ));
                         }
-                        _ => return Err(format!("{}: data line outside a section: \"{l}\"", path.display())),
+                        let x = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
+                        self.world.p.push(id, typ - 1, x, num(t[2])?, num(t[3])?);
+                        if t.len() >= 10 {
+                            let i = self.world.p.len() - 1;
+                            self.world.p.image[i] = [int(t[7])? as i32, int(t[8])? as i32, int(t[9])? as i32];
+                        }
                     }
-                }
+                    "Velocities" => {
+                        if t.len() < 7 {
+                            return Err(format!(
+                                "{}: Velocities line needs id vx vy vz wx wy wz",
+                                path.display()
+                            ));
+                        }
+                        let id = int(t[0])?;
+                        let i = self.index_of(id)?;
+                        self.world.p.v[i] = Vec3::new(num(t[1])?, num(t[2])?, num(t[3])?);
+                        self.world.p.omega[i] = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
+                    }
+                    _ => return Err(format!("{}: data line outside a section: \"{l}\"", path.display())),
+                },
             }
         }
-        let _ = n_in_section;
         if self.world.p.len() != natoms {
             return Err(format!(
                 "{}: header says {natoms} atoms, found {}",
@@ -992,7 +982,7 @@ impl Deck {
             return Err("fix ave/time: expected Nevery Nrepeat Nfreq values…".into());
         }
         let (ne, nr, nf) = (int(a[4])? as u64, int(a[5])? as u64, int(a[6])? as u64);
-        if ne == 0 || nr == 0 || nf == 0 || nf % ne != 0 || (nr - 1) * ne >= nf + 1 && nr * ne > nf {
+        if ne == 0 || nr == 0 || nf == 0 || nf % ne != 0 || nr * ne > nf {
             return Err("fix ave/time: need Nfreq a multiple of Nevery and Nrepeat*Nevery <= Nfreq".into());
         }
         let mut values = Vec::new();
@@ -1202,6 +1192,7 @@ impl Deck {
         }
         self.world.set_materials(mats, &rest, &fric)?;
         self.world.closure = Some(closure);
+        self.world.liggghts_radii = pair.surface_mc;
         self.world.mc_range = if closure == Closure::MultiContact { 1.25 } else { 1.0 };
         Ok(())
     }

@@ -238,6 +238,11 @@ pub struct World {
     pub integrate: bool,
     /// Number of neighbour-list builds so far.
     pub builds: u64,
+    /// LIGGGHTS 3.8 `surface multicontact` radius convention in pairs: the first particle of a
+    /// pair keeps its original radius in R_eff and lever arm (only its overlap sees Δ). Set for
+    /// decks that ask for LIGGGHTS' standard MC, so both engines give the same forces; the
+    /// `mc_advanced` model uses the modified radii of both particles (SPEC §2).
+    pub liggghts_radii: bool,
 
     cells: CellList,
     cand: Vec<(u32, u32)>,
@@ -256,17 +261,12 @@ pub struct World {
     dr_buf: Vec<f64>,
     fb_buf: Vec<bool>,
     loaded: Vec<bool>,
+    pair_out: Vec<PairForce>,
 }
 
 impl World {
     pub fn new() -> Self {
         World { mc_range: 1.0, ..Default::default() }
-    }
-
-    /// Pair coefficients of two types.
-    #[inline]
-    fn coeff(&self, ti: usize, tj: usize) -> &PairCoeffs {
-        &self.coeffs[ti * self.ntypes + tj]
     }
 
     /// Checks that the world is complete and consistent, and builds the neighbour list: called by
@@ -695,55 +695,39 @@ impl World {
         }
         let dt = if update { self.dt } else { 0.0 };
         let nt = self.ntypes;
-        // Pairs.
-        for pr in self.pairs.iter_mut() {
-            let (i, j) = (pr.i as usize, pr.j as usize);
-            let mut d = self.p.x[i] - self.p.x[j];
-            domain.minimum_image(&mut d);
-            let (ri, rj) = (self.p.radius[i] + pr.dri, self.p.radius[j] + pr.drj);
-            let radsum = ri + rj;
-            if d.norm_squared() >= radsum * radsum {
-                if update {
-                    pr.shear = Vec3::zeros();
-                    pr.fn_prev = 0.0;
-                    pr.ri_prev = ri;
-                    pr.rj_prev = rj;
-                }
-                continue;
+        // Pairs: evaluated independently (in parallel when it pays), then scattered in pair order,
+        // so the sums are bit-identical whatever the number of threads.
+        self.pair_out.clear();
+        self.pair_out.resize(self.pairs.len(), None);
+        let ctx = PairCtx {
+            p: &self.p,
+            coeffs: &self.coeffs,
+            nt,
+            domain,
+            dt,
+            update,
+            step: self.step,
+            liggghts_radii: self.liggghts_radii,
+        };
+        if self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
+            use rayon::prelude::*;
+            self.pairs
+                .par_iter_mut()
+                .zip(self.pair_out.par_iter_mut())
+                .with_min_len(256)
+                .try_for_each(|(pr, out)| ctx.eval(pr).map(|r| *out = r))?;
+        } else {
+            for (pr, out) in self.pairs.iter_mut().zip(self.pair_out.iter_mut()) {
+                *out = ctx.eval(pr)?;
             }
-            let bi = Body {
-                x: self.p.x[i],
-                v: self.p.v[i],
-                omega: self.p.omega[i],
-                radius: self.p.radius[i],
-                mass: self.p.mass[i],
-            };
-            let bj = Body {
-                x: self.p.x[i] - d,
-                v: self.p.v[j],
-                omega: self.p.omega[j],
-                radius: self.p.radius[j],
-                mass: self.p.mass[j],
-            };
-            let c = &self.coeffs[self.p.typ[i] * nt + self.p.typ[j]];
-            let mut shear = pr.shear;
-            let r = particle_particle(c, &bi, &bj, pr.dri, pr.drj, dt, &mut shear)
-                .map_err(|e| contact_error(self.step, self.p.id[i], Some(self.p.id[j]), e))?;
-            let fnorm = match r {
-                Some(cf) => {
-                    self.p.f[i] += cf.force_i;
-                    self.p.f[j] -= cf.force_i;
-                    self.p.torque[i] += cf.torque_i;
-                    self.p.torque[j] += cf.torque_j;
-                    cf.force_i.dot(&cf.en).abs()
-                }
-                None => 0.0,
-            };
-            if update {
-                pr.shear = shear;
-                pr.fn_prev = fnorm;
-                pr.ri_prev = ri;
-                pr.rj_prev = rj;
+        }
+        for (pr, out) in self.pairs.iter().zip(&self.pair_out) {
+            if let Some((fi, ti, tj)) = out {
+                let (i, j) = (pr.i as usize, pr.j as usize);
+                self.p.f[i] += fi;
+                self.p.f[j] -= fi;
+                self.p.torque[i] += ti;
+                self.p.torque[j] += tj;
             }
         }
         // Body forces come next, then the walls (the order of the example decks' fixes).
@@ -886,8 +870,78 @@ impl World {
         self.ntypes = nt;
         self.materials = materials;
         self.coeffs = coeffs;
-        let _ = self.coeff(0, 0);
         Ok(())
+    }
+}
+
+/// Below this many candidate pairs a step is too short for threads to pay off.
+const PARALLEL_MIN_PAIRS: usize = 1024;
+
+/// Read-only view of the state that one pair evaluation needs (shared between threads).
+struct PairCtx<'a> {
+    p: &'a Particles,
+    coeffs: &'a [PairCoeffs],
+    nt: usize,
+    domain: Domain,
+    dt: f64,
+    update: bool,
+    step: u64,
+    liggghts_radii: bool,
+}
+
+type PairForce = Option<(Vec3, Vec3, Vec3)>;
+
+impl PairCtx<'_> {
+    /// Force on i, torques on i and j of one pair (None when not touching); updates the pair's
+    /// history when `update`.
+    #[inline]
+    fn eval(&self, pr: &mut Pair) -> Result<PairForce, StepError> {
+        let p = self.p;
+        let (i, j) = (pr.i as usize, pr.j as usize);
+        let mut d = p.x[i] - p.x[j];
+        self.domain.minimum_image(&mut d);
+        let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
+        let radsum = ri + rj;
+        if d.norm_squared() >= radsum * radsum {
+            if self.update {
+                pr.shear = Vec3::zeros();
+                pr.fn_prev = 0.0;
+                pr.ri_prev = ri;
+                pr.rj_prev = rj;
+            }
+            return Ok(None);
+        }
+        let bi = Body { x: p.x[i], v: p.v[i], omega: p.omega[i], radius: p.radius[i], mass: p.mass[i] };
+        let mut bj =
+            Body { x: p.x[i] - d, v: p.v[j], omega: p.omega[j], radius: p.radius[j], mass: p.mass[j] };
+        let mut dri = pr.dri;
+        let mut ri_stored = ri;
+        if self.liggghts_radii && pr.dri != 0.0 {
+            // LIGGGHTS 3.8 `surface multicontact` keeps particle i's original radius in R_eff and
+            // in its lever arm (only the overlap sees r_i + Δ). Same effect through the physics
+            // core: original r_i, and j moved Δ_i closer along the normal.
+            let r = d.norm();
+            if r > pr.dri {
+                bj.x = p.x[i] - d * ((r - pr.dri) / r);
+                dri = 0.0;
+                ri_stored = p.radius[i];
+            }
+        }
+        let c = &self.coeffs[p.typ[i] * self.nt + p.typ[j]];
+        let mut shear = pr.shear;
+        let r = particle_particle(c, &bi, &bj, dri, pr.drj, self.dt, &mut shear)
+            .map_err(|e| contact_error(self.step, p.id[i], Some(p.id[j]), e))?;
+        let (out, fnorm) = match r {
+            Some(cf) => (Some((cf.force_i, cf.torque_i, cf.torque_j)), cf.force_i.dot(&cf.en).abs()),
+            None => (None, 0.0),
+        };
+        if self.update {
+            pr.shear = shear;
+            pr.fn_prev = fnorm;
+            pr.ri_prev = ri_stored;
+            pr.rj_prev = rj;
+        }
+        Ok(out)
     }
 }
 
