@@ -102,6 +102,7 @@ struct Deck {
     progress: bool,
     summary: RunSummary,
     line_no: usize,
+    scratch: Vec<f64>,
 }
 
 type R<T> = Result<T, String>;
@@ -209,6 +210,7 @@ impl Deck {
             progress: opts.progress,
             summary: RunSummary::default(),
             line_no: 0,
+            scratch: Vec::new(),
         })
     }
 
@@ -1247,10 +1249,16 @@ impl Deck {
             if at.nvalid != step {
                 continue;
             }
-            let vals = at.values.iter().map(|v| self.value_of(v, 0)).collect::<R<Vec<f64>>>()?;
+            // Reused buffer: sampling happens every step in typical decks.
+            let mut vals = std::mem::take(&mut self.scratch);
+            vals.clear();
+            for v in &at.values {
+                vals.push(self.value_of(v, 0)?);
+            }
             if let Some(at) = self.aves[k].as_mut() {
                 at.sample(step, &vals)?;
             }
+            self.scratch = vals;
         }
         for d in &mut self.dumps {
             if step % d.every == 0 && d.last != Some(step) {
@@ -1337,7 +1345,8 @@ impl Deck {
         self.summary.neighbor_builds += self.world.builds - builds0;
         let rate = if secs > 0.0 { nsteps as f64 * np as f64 / secs } else { 0.0 };
         self.say(&format!(
-            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} neighbour builds)\n",
+            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} threads, {} neighbour builds)\n",
+            rayon::current_num_threads(),
             self.world.builds - builds0
         ));
         Ok(())
