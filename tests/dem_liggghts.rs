@@ -201,11 +201,25 @@ fn nrmse_per_stroke(ours: &str, theirs: &str, stroke_steps: u64) -> Vec<f64> {
         .collect()
 }
 
-/// The hydrogel example with strokes of `ts` steps instead of 30000 (same piston travel).
-fn hydrogel(deck: &str, ts: u64, out: &str) {
+/// The hydrogel example with strokes of `ts` steps instead of 30000 (same piston travel), cut
+/// after `strokes` strokes.
+fn hydrogel(deck: &str, ts: u64, out: &str, strokes: usize) {
     let dir = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(Path::new(HYDROGEL).join(deck)).unwrap();
     let text = text.replace("variable ts_move   equal 30000", &format!("variable ts_move   equal {ts}"));
+    let mut cut = String::new();
+    let mut runs = 0;
+    for l in text.lines() {
+        if runs > strokes {
+            break;
+        }
+        if l.starts_with("run") {
+            runs += 1;
+        }
+        cut.push_str(l);
+        cut.push('\n');
+    }
+    let text = cut;
     let path = dir.path().join(deck);
     std::fs::write(&path, text).unwrap();
     copy_dir(&Path::new(HYDROGEL).join("data"), &dir.path().join("data"));
@@ -216,7 +230,7 @@ fn hydrogel(deck: &str, ts: u64, out: &str) {
     let b = std::fs::read_to_string(t.path().join(&f)).unwrap();
     let e = nrmse_per_stroke(&a, &b, ts);
     println!("{deck} ({ts} steps per stroke): NRMSE per stroke {e:?}");
-    assert_eq!(e.len(), 4);
+    assert_eq!(e.len(), strokes);
     for (k, v) in e.iter().enumerate() {
         assert!(*v <= 0.03, "stroke {}: NRMSE {v} > 3 %", k + 1);
     }
@@ -227,7 +241,17 @@ fn hydrogel_default_short_strokes_piston_force_nrmse() {
     if !have_liggghts() || !Path::new(HYDROGEL).exists() {
         return;
     }
-    hydrogel("in.hydrogel_default", 3000, "piston_force_default.txt");
+    hydrogel("in.hydrogel_default", 3000, "piston_force_default.txt", 4);
+}
+
+/// Standard multi-contact, two fast strokes (about a minute of LIGGGHTS time: its multi-contact
+/// path is slow). Later fast strokes are too chaotic for a 3 % bound; the full deck has it.
+#[test]
+fn hydrogel_multicontact_short_strokes_piston_force_nrmse() {
+    if !have_liggghts() || !Path::new(HYDROGEL).exists() {
+        return;
+    }
+    hydrogel("in.hydrogel_multicontact", 3000, "piston_force_multicontact.txt", 2);
 }
 
 #[test]
@@ -236,7 +260,7 @@ fn hydrogel_default_full_piston_force_nrmse() {
     if !have_liggghts() || !Path::new(HYDROGEL).exists() {
         return;
     }
-    hydrogel("in.hydrogel_default", 30000, "piston_force_default.txt");
+    hydrogel("in.hydrogel_default", 30000, "piston_force_default.txt", 4);
 }
 
 #[test]
@@ -245,5 +269,5 @@ fn hydrogel_multicontact_full_piston_force_nrmse() {
     if !have_liggghts() || !Path::new(HYDROGEL).exists() {
         return;
     }
-    hydrogel("in.hydrogel_multicontact", 30000, "piston_force_multicontact.txt");
+    hydrogel("in.hydrogel_multicontact", 30000, "piston_force_multicontact.txt", 4);
 }

@@ -263,6 +263,8 @@ pub struct World {
     loaded: Vec<bool>,
     pair_out: Vec<PairForce>,
     pair_mc: Vec<bool>,
+    f_buf: Vec<Vec3>,
+    t_buf: Vec<Vec3>,
 }
 
 impl World {
@@ -711,8 +713,6 @@ impl World {
         let nt = self.ntypes;
         // Pairs: evaluated independently (in parallel when it pays), then scattered in pair order,
         // so the sums are bit-identical whatever the number of threads.
-        self.pair_out.clear();
-        self.pair_out.resize(self.pairs.len(), None);
         let ctx = PairCtx {
             p: &self.p,
             coeffs: &self.coeffs,
@@ -725,24 +725,40 @@ impl World {
         };
         if self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
             use rayon::prelude::*;
+            self.pair_out.clear();
+            self.pair_out.resize(self.pairs.len(), None);
             self.pairs
                 .par_iter_mut()
                 .zip(self.pair_out.par_iter_mut())
                 .with_min_len(256)
                 .try_for_each(|(pr, out)| ctx.eval(pr).map(|r| *out = r))?;
+            for (pr, out) in self.pairs.iter().zip(&self.pair_out) {
+                if let Some((fi, ti, tj)) = out {
+                    let (i, j) = (pr.i as usize, pr.j as usize);
+                    self.p.f[i] += fi;
+                    self.p.f[j] -= fi;
+                    self.p.torque[i] += ti;
+                    self.p.torque[j] += tj;
+                }
+            }
         } else {
-            for (pr, out) in self.pairs.iter_mut().zip(self.pair_out.iter_mut()) {
-                *out = ctx.eval(pr)?;
+            // Same accumulation order as the parallel path: identical sums.
+            let (f, torque) = (&mut self.f_buf, &mut self.t_buf);
+            f.clear();
+            f.resize(n, Vec3::zeros());
+            torque.clear();
+            torque.resize(n, Vec3::zeros());
+            for pr in self.pairs.iter_mut() {
+                if let Some((fi, ti, tj)) = ctx.eval(pr)? {
+                    let (i, j) = (pr.i as usize, pr.j as usize);
+                    f[i] += fi;
+                    f[j] -= fi;
+                    torque[i] += ti;
+                    torque[j] += tj;
+                }
             }
-        }
-        for (pr, out) in self.pairs.iter().zip(&self.pair_out) {
-            if let Some((fi, ti, tj)) = out {
-                let (i, j) = (pr.i as usize, pr.j as usize);
-                self.p.f[i] += fi;
-                self.p.f[j] -= fi;
-                self.p.torque[i] += ti;
-                self.p.torque[j] += tj;
-            }
+            std::mem::swap(&mut self.p.f, &mut self.f_buf);
+            std::mem::swap(&mut self.p.torque, &mut self.t_buf);
         }
         // Body forces come next, then the walls (the order of the example decks' fixes).
         if let Some(g) = self.gravity {
