@@ -265,6 +265,9 @@ pub struct World {
     pair_mc: Vec<bool>,
     f_buf: Vec<Vec3>,
     t_buf: Vec<Vec3>,
+    parallel: bool,
+    tune_ser_ns: u64,
+    tune_par_ns: u64,
 }
 
 impl World {
@@ -357,7 +360,28 @@ impl World {
             }
         }
         self.neighbor_check()?;
+        // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window with
+        // and without them and keep the faster (results are bit-identical either way).
+        let phase = self.step % TUNE_PERIOD;
+        let probe = phase < 2 * TUNE_WINDOW;
+        if probe {
+            self.parallel = phase >= TUNE_WINDOW;
+        }
+        let t0 = probe.then(std::time::Instant::now);
         self.compute_forces(true)?;
+        if let Some(t0) = t0 {
+            let ns = t0.elapsed().as_nanos() as u64;
+            if self.parallel {
+                self.tune_par_ns += ns;
+            } else {
+                self.tune_ser_ns += ns;
+            }
+            if phase == 2 * TUNE_WINDOW - 1 {
+                self.parallel = self.tune_par_ns < self.tune_ser_ns;
+                self.tune_par_ns = 0;
+                self.tune_ser_ns = 0;
+            }
+        }
         if self.integrate {
             self.final_integrate()?;
         }
@@ -723,7 +747,7 @@ impl World {
             step: self.step,
             liggghts_radii: self.liggghts_radii,
         };
-        if self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
+        if self.parallel && self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
             use rayon::prelude::*;
             self.pair_out.clear();
             self.pair_out.resize(self.pairs.len(), None);
@@ -907,6 +931,10 @@ impl World {
 /// Relative gap (fraction of r_i + r_j) within which an unloaded pair still receives a
 /// multi-contact radius change: growth beyond 5 % of both radii is outside the model's range.
 const RECEIVER_GAP: f64 = 0.1;
+
+/// Steps between two serial-vs-threads timing probes, and the length of each probe window.
+const TUNE_PERIOD: u64 = 5000;
+const TUNE_WINDOW: u64 = 50;
 
 /// Below this many candidate pairs a step is too short for threads to pay off.
 const PARALLEL_MIN_PAIRS: usize = 1024;
