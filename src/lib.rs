@@ -7,6 +7,8 @@
 
 pub mod checks;
 pub mod contacts_cli;
+pub mod deck;
+pub mod engine;
 pub mod ffi;
 pub mod physics;
 pub mod validate;

@@ -20,6 +20,20 @@ enum Command {
         /// JSON file, or - for standard input
         file: String,
     },
+    /// Run a LIGGGHTS deck with the standalone engine: `mcdem run DECK [-var NAME VALUE]... [-log FILE]`
+    Run {
+        /// The input deck
+        deck: PathBuf,
+        /// Define an index variable before the deck is read (LIGGGHTS -var)
+        #[arg(long = "var", short_alias = 'v', num_args = 2, value_names = ["NAME", "VALUE"], action = clap::ArgAction::Append, allow_hyphen_values = true)]
+        var: Vec<String>,
+        /// Log file (default log.liggghts; `none` for no log)
+        #[arg(long = "log")]
+        log: Option<PathBuf>,
+        /// No progress bar even on a terminal
+        #[arg(long)]
+        no_progress: bool,
+    },
     /// Run the validation suite and write the report
     Validate {
         /// Quick subset (CI)
@@ -63,14 +77,36 @@ fn validate(quick: bool, cases: Vec<String>, out: PathBuf) -> Result<(), String>
     }
 }
 
+fn run(deck: PathBuf, var: Vec<String>, log: Option<PathBuf>, no_progress: bool) -> Result<(), String> {
+    let vars = var.chunks(2).map(|c| (c[0].clone(), c[1].clone())).collect();
+    let opts = mcdem::deck::Options { vars, log, progress: !no_progress };
+    mcdem::deck::run_file(&deck, &opts).map(|_| ()).map_err(|e| format!("ERROR: {e}"))
+}
+
+/// LIGGGHTS spells its options with one dash (`-var`, `-log`); accept both spellings.
+fn liggghts_args() -> Vec<String> {
+    std::env::args()
+        .map(|a| match a.as_str() {
+            "-var" => "--var".to_string(),
+            "-log" => "--log".to_string(),
+            _ => a,
+        })
+        .collect()
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(liggghts_args());
     let result = match cli.command {
         Command::Contacts { file } => contacts(&file),
         Command::Validate { quick, cases, out } => validate(quick, cases, out),
+        Command::Run { deck, var, log, no_progress } => run(deck, var, log, no_progress),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.starts_with("ERROR: ") => {
+            eprintln!("{e}");
+            ExitCode::from(1)
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(2)

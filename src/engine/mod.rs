@@ -1,0 +1,1031 @@
+//! The standalone DEM engine: particle state as a struct of arrays, cell-list neighbours with a
+//! skin, contact history keyed by particle ids, walls (primitive planes and STL meshes), periodic
+//! boundaries and velocity Verlet with rotation (LIGGGHTS `fix nve/sphere`).
+//!
+//! Contact forces come only from [`crate::physics`]: this module does geometry bookkeeping and
+//! integration, never a contact formula of its own.
+//!
+//! One step follows the LAMMPS/LIGGGHTS Verlet order, so both engines agree step by step:
+//! first half kick + drift (and mesh motion), neighbour check, forces (multi-contact radius
+//! changes, pairs, gravity, walls), second half kick.
+
+pub mod mesh;
+pub mod neighbor;
+
+use std::fmt;
+
+use crate::physics::contact_set::{radius_changes, ContactLoad, McParams};
+use crate::physics::pair::{particle_particle, particle_wall, Body, ContactError, WallPoint};
+use crate::physics::{Material, PairCoeffs, Vec3};
+
+pub use mesh::Mesh;
+use neighbor::CellList;
+
+/// Moment of inertia prefactor of a solid sphere, I = 0.4 m r² (as LIGGGHTS `nve/sphere`).
+const INERTIA: f64 = 0.4;
+
+/// Simulation box: bounds and which axes are periodic.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Domain {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub periodic: [bool; 3],
+}
+
+impl Domain {
+    /// Shortest periodic image of a separation vector.
+    #[inline]
+    pub fn minimum_image(&self, d: &mut Vec3) {
+        for a in 0..3 {
+            if self.periodic[a] {
+                let l = self.hi[a] - self.lo[a];
+                if d[a].abs() > 0.5 * l {
+                    d[a] -= l * (d[a] / l).round();
+                }
+            }
+        }
+    }
+
+    pub fn volume(&self) -> f64 {
+        let l = self.hi - self.lo;
+        l.x * l.y * l.z
+    }
+}
+
+/// Per-particle state, struct of arrays. Indices are stable for the whole run (no reordering),
+/// so the contact history, keyed by particle ids, can be kept sorted by index.
+#[derive(Debug, Clone, Default)]
+pub struct Particles {
+    pub id: Vec<i64>,
+    /// Atom type, 0-based.
+    pub typ: Vec<usize>,
+    pub x: Vec<Vec3>,
+    pub v: Vec<Vec3>,
+    pub omega: Vec<Vec3>,
+    pub f: Vec<Vec3>,
+    pub torque: Vec<Vec3>,
+    pub radius: Vec<f64>,
+    pub mass: Vec<f64>,
+    pub density: Vec<f64>,
+    /// Periodic image counts (LAMMPS ix iy iz).
+    pub image: Vec<[i32; 3]>,
+}
+
+impl Particles {
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Adds a sphere; mass from the density as LIGGGHTS `atom_style sphere` does.
+    pub fn push(&mut self, id: i64, typ: usize, x: Vec3, diameter: f64, density: f64) {
+        let r = 0.5 * diameter;
+        self.id.push(id);
+        self.typ.push(typ);
+        self.x.push(x);
+        self.v.push(Vec3::zeros());
+        self.omega.push(Vec3::zeros());
+        self.f.push(Vec3::zeros());
+        self.torque.push(Vec3::zeros());
+        self.radius.push(r);
+        self.mass.push(sphere_mass(r, density));
+        self.density.push(density);
+        self.image.push([0; 3]);
+    }
+
+    /// Recomputes the mass of particle `i` after a diameter or density change.
+    pub fn set_size(&mut self, i: usize, diameter: Option<f64>, density: Option<f64>) {
+        if let Some(d) = diameter {
+            self.radius[i] = 0.5 * d;
+        }
+        if let Some(rho) = density {
+            self.density[i] = rho;
+        }
+        self.mass[i] = sphere_mass(self.radius[i], self.density[i]);
+    }
+}
+
+fn sphere_mass(r: f64, density: f64) -> f64 {
+    if r == 0.0 {
+        density
+    } else {
+        4.0 * std::f64::consts::PI / 3.0 * r * r * r * density
+    }
+}
+
+/// A primitive plane wall `xplane|yplane|zplane POS`; particles on either side touch it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneWall {
+    pub axis: usize,
+    pub pos: f64,
+    pub wall_type: usize,
+}
+
+/// A `fix wall/gran`: one plane, or the meshes it uses (indices into [`World::meshes`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum WallGeom {
+    Plane(PlaneWall),
+    Meshes(Vec<usize>),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct WallFix {
+    pub name: String,
+    pub geom: WallGeom,
+}
+
+/// Candidate pair with its contact history (tangential ξ) and the multi-contact bookkeeping.
+#[derive(Debug, Clone, Copy)]
+struct Pair {
+    i: u32,
+    j: u32,
+    shear: Vec3,
+    /// |F·n| of the previous step (Eq. 2 is lagged one step).
+    fn_prev: f64,
+    /// Modified radii r + Δ used at the previous step (contact point of the next step, as LIGGGHTS).
+    ri_prev: f64,
+    rj_prev: f64,
+    dri: f64,
+    drj: f64,
+}
+
+/// A particle close to a wall element (plane, or one triangle of a mesh) with its history.
+#[derive(Debug, Clone, Copy)]
+struct WallContact {
+    p: u32,
+    wall: u32,
+    mesh: u32,
+    tri: u32,
+    point: Vec3,
+    velocity: Vec3,
+    shear: Vec3,
+    fn_prev: f64,
+    /// Contact point relative to the centre at the previous step (LIGGGHTS `surfPos`): the
+    /// multi-contact pass reads it, as LIGGGHTS does; zero for a contact seen for the first time.
+    rel_prev: Vec3,
+    dr: f64,
+}
+
+impl WallContact {
+    #[inline]
+    fn key(&self) -> (u32, u32, u32, u32) {
+        (self.p, self.wall, self.mesh, self.tri)
+    }
+}
+
+/// Which multi-contact closure the contacts use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Closure {
+    /// Plain Hertz: no radius changes.
+    Hertz,
+    /// Eq. 2 (standard MC), with the Eq. 3 cap where a type's material carries one.
+    MultiContact,
+}
+
+/// Why a run stopped: the particle, the step and the cause.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepError {
+    pub step: u64,
+    pub particle: i64,
+    pub cause: String,
+}
+
+impl fmt::Display for StepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "step {}: particle {}: {}", self.step, self.particle, self.cause)
+    }
+}
+
+impl std::error::Error for StepError {}
+
+/// Per-type MC kernel parameters without the radius (filled in per particle).
+#[derive(Debug, Clone, Copy)]
+struct McType {
+    material: Material,
+}
+
+/// Indirection from a particle to one of its contacts, for the multi-contact pass.
+#[derive(Debug, Clone, Copy)]
+enum Slot {
+    PairI(u32),
+    PairJ(u32),
+    Wall(u32),
+}
+
+/// The whole simulated system.
+#[derive(Debug, Default)]
+pub struct World {
+    pub domain: Option<Domain>,
+    pub p: Particles,
+    pub ntypes: usize,
+    /// Per type (0-based): material.
+    pub materials: Vec<Material>,
+    /// ntypes × ntypes pair coefficients, row-major.
+    pub coeffs: Vec<PairCoeffs>,
+    pub closure: Option<Closure>,
+    pub dt: f64,
+    pub step: u64,
+    pub gravity: Option<Vec3>,
+    pub walls: Vec<WallFix>,
+    pub meshes: Vec<Mesh>,
+    pub skin: f64,
+    /// Multi-contact range factor for the neighbour cutoff (radius growth, SPEC §2).
+    pub mc_range: f64,
+    /// Is each particle integrated (`fix nve/sphere` present)?
+    pub integrate: bool,
+    /// Number of neighbour-list builds so far.
+    pub builds: u64,
+    /// LIGGGHTS 3.8 `surface multicontact` radius convention in pairs: the first particle of a
+    /// pair keeps its original radius in R_eff and lever arm (only its overlap sees Δ). Set for
+    /// decks that ask for LIGGGHTS' standard MC, so both engines give the same forces; the
+    /// `mc_advanced` model uses the modified radii of both particles (SPEC §2).
+    pub liggghts_radii: bool,
+
+    cells: CellList,
+    cand: Vec<(u32, u32)>,
+    pairs: Vec<Pair>,
+    pairs_old: Vec<Pair>,
+    wc: Vec<WallContact>,
+    wc_old: Vec<WallContact>,
+    x_build: Vec<Vec3>,
+    need_build: bool,
+    mc_types: Vec<McType>,
+    // multi-contact scratch (kept between steps: no allocation in the loop)
+    slot_start: Vec<u32>,
+    slots: Vec<Slot>,
+    slot_fill: Vec<u32>,
+    loads: Vec<ContactLoad>,
+    dr_buf: Vec<f64>,
+    fb_buf: Vec<bool>,
+    loaded: Vec<bool>,
+    pair_out: Vec<PairForce>,
+    pair_mc: Vec<bool>,
+    f_buf: Vec<Vec3>,
+    t_buf: Vec<Vec3>,
+    parallel: bool,
+    tune_ser_ns: u64,
+    tune_par_ns: u64,
+}
+
+impl World {
+    pub fn new() -> Self {
+        World { mc_range: 1.0, ..Default::default() }
+    }
+
+    /// Checks that the world is complete and consistent, and builds the neighbour list: called by
+    /// every `run` before the first step (LAMMPS `setup`).
+    pub fn setup(&mut self) -> Result<Vec<String>, String> {
+        let mut warnings = Vec::new();
+        let domain = self.domain.ok_or("no simulation box (create_box or read_data) before run")?;
+        if self.dt <= 0.0 {
+            return Err("timestep must be > 0".into());
+        }
+        if self.closure.is_none() {
+            return Err("no pair_style gran defined before run".into());
+        }
+        if self.coeffs.len() != self.ntypes * self.ntypes {
+            return Err("material properties missing (fix property/global youngsModulus, poissonsRatio, coefficientRestitution, coefficientFriction)".into());
+        }
+        let n = self.p.len();
+        for i in 0..n {
+            if !(self.p.radius[i] > 0.0 && self.p.mass[i] > 0.0) {
+                return Err(format!("particle {}: radius and mass must be > 0", self.p.id[i]));
+            }
+        }
+        // Rayleigh time step (LIGGGHTS checks the same): above it the explicit scheme is unstable.
+        let mut worst: Option<(f64, usize)> = None;
+        for i in 0..n {
+            let m = &self.materials[self.p.typ[i]];
+            let nu = m.poisson_ratio;
+            let g = m.youngs_modulus / (2.0 * (1.0 + nu));
+            let t_r = std::f64::consts::PI * self.p.radius[i] * (self.p.density[i] / g).sqrt()
+                / (0.1631 * nu + 0.8766);
+            if worst.is_none_or(|(t, _)| t_r < t) {
+                worst = Some((t_r, i));
+            }
+        }
+        if let Some((t_r, i)) = worst {
+            if self.dt > t_r {
+                return Err(format!(
+                    "step {}: particle {}: time step {:e} s is above the Rayleigh time {:e} s: the run would be unstable",
+                    self.step, self.p.id[i], self.dt, t_r
+                ));
+            }
+            if self.dt > 0.2 * t_r {
+                warnings.push(format!(
+                    "time step {:e} s is {:.0} % of the Rayleigh time {:e} s (particle {}); keep it below 20 %",
+                    self.dt,
+                    100.0 * self.dt / t_r,
+                    t_r,
+                    self.p.id[i]
+                ));
+            }
+        }
+        let rmax = self.p.radius.iter().copied().fold(0.0, f64::max);
+        for a in 0..3 {
+            let l = domain.hi[a] - domain.lo[a];
+            if domain.periodic[a] && l < 2.0 * (2.0 * rmax * self.mc_range + self.skin) {
+                return Err(format!(
+                    "periodic box length {l:e} m along axis {a} is shorter than twice the neighbour cutoff"
+                ));
+            }
+        }
+        self.mc_types = self.materials.iter().map(|m| McType { material: *m }).collect();
+        self.need_build = true;
+        self.neighbor_check().map_err(|e| e.to_string())?;
+        // LIGGGHTS zeroes mesh node velocities at set-up (fix move/mesh sets them again in the
+        // first step), so the set-up forces see resting meshes.
+        let vel: Vec<Vec3> = self.meshes.iter().map(|m| m.velocity).collect();
+        self.meshes.iter_mut().for_each(|m| m.velocity = Vec3::zeros());
+        let r = self.compute_forces(false).map_err(|e| e.to_string());
+        self.meshes.iter_mut().zip(vel).for_each(|(m, v)| m.velocity = v);
+        r?;
+        Ok(warnings)
+    }
+
+    /// One velocity-Verlet step.
+    pub fn step(&mut self) -> Result<(), StepError> {
+        self.step += 1;
+        let dt = self.dt;
+        if self.integrate {
+            self.initial_integrate();
+        }
+        for m in &mut self.meshes {
+            if m.velocity != Vec3::zeros() {
+                let d = m.velocity * dt;
+                m.translate(&d);
+            }
+        }
+        self.neighbor_check()?;
+        // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window with
+        // and without them and keep the faster (results are bit-identical either way).
+        let phase = self.step % TUNE_PERIOD;
+        let probe = phase < 2 * TUNE_WINDOW;
+        if probe {
+            self.parallel = phase >= TUNE_WINDOW;
+        }
+        let t0 = probe.then(std::time::Instant::now);
+        self.compute_forces(true)?;
+        if let Some(t0) = t0 {
+            let ns = t0.elapsed().as_nanos() as u64;
+            if self.parallel {
+                self.tune_par_ns += ns;
+            } else {
+                self.tune_ser_ns += ns;
+            }
+            if phase == 2 * TUNE_WINDOW - 1 {
+                self.parallel = self.tune_par_ns < self.tune_ser_ns;
+                self.tune_par_ns = 0;
+                self.tune_ser_ns = 0;
+            }
+        }
+        if self.integrate {
+            self.final_integrate()?;
+        }
+        Ok(())
+    }
+
+    fn initial_integrate(&mut self) {
+        let dtf = 0.5 * self.dt;
+        let dtv = self.dt;
+        let dtfrot = dtf / INERTIA;
+        let p = &mut self.p;
+        for i in 0..p.x.len() {
+            let dtfm = dtf / p.mass[i];
+            p.v[i] += dtfm * p.f[i];
+            p.x[i] += dtv * p.v[i];
+            let dtirot = dtfrot / (p.radius[i] * p.radius[i] * p.mass[i]);
+            p.omega[i] += dtirot * p.torque[i];
+        }
+    }
+
+    fn final_integrate(&mut self) -> Result<(), StepError> {
+        let dtf = 0.5 * self.dt;
+        let dtfrot = dtf / INERTIA;
+        let p = &mut self.p;
+        for i in 0..p.x.len() {
+            let dtfm = dtf / p.mass[i];
+            p.v[i] += dtfm * p.f[i];
+            let dtirot = dtfrot / (p.radius[i] * p.radius[i] * p.mass[i]);
+            p.omega[i] += dtirot * p.torque[i];
+            if !(p.x[i].iter().all(|c| c.is_finite()) && p.v[i].iter().all(|c| c.is_finite())) {
+                return Err(StepError {
+                    step: self.step,
+                    particle: p.id[i],
+                    cause: "position or velocity is not finite".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Rebuilds the neighbour list when a particle moved more than skin/2 (or on request).
+    fn neighbor_check(&mut self) -> Result<(), StepError> {
+        let half = 0.5 * self.skin;
+        if !self.need_build {
+            let lim = half * half;
+            let moved = self.p.x.iter().zip(&self.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim);
+            if !moved {
+                return Ok(());
+            }
+        }
+        self.need_build = false;
+        self.builds += 1;
+        let domain = self.domain.expect("domain checked in setup");
+        // Periodic wrap and lost-particle check happen at rebuilds, as in LAMMPS.
+        for i in 0..self.p.len() {
+            for a in 0..3 {
+                let (lo, hi) = (domain.lo[a], domain.hi[a]);
+                let x = &mut self.p.x[i][a];
+                if domain.periodic[a] {
+                    let l = hi - lo;
+                    while *x >= hi {
+                        *x -= l;
+                        self.p.image[i][a] += 1;
+                    }
+                    while *x < lo {
+                        *x += l;
+                        self.p.image[i][a] -= 1;
+                    }
+                } else if !(*x >= lo && *x <= hi) {
+                    return Err(StepError {
+                        step: self.step,
+                        particle: self.p.id[i],
+                        cause: format!(
+                            "left the box along {} (coordinate {:e} m outside [{:e}, {:e}]): lost particle",
+                            ["x", "y", "z"][a],
+                            *x,
+                            lo,
+                            hi
+                        ),
+                    });
+                }
+            }
+        }
+        self.cells.build(&domain, &self.p.x, &self.p.radius, self.skin, self.mc_range, &mut self.cand);
+        // Carry the history over: both lists are sorted by (i, j).
+        std::mem::swap(&mut self.pairs, &mut self.pairs_old);
+        self.pairs.clear();
+        let mut k = 0;
+        for &(i, j) in &self.cand {
+            while k < self.pairs_old.len() && (self.pairs_old[k].i, self.pairs_old[k].j) < (i, j) {
+                k += 1;
+            }
+            let old = self.pairs_old.get(k).filter(|o| o.i == i && o.j == j);
+            self.pairs.push(match old {
+                Some(o) => *o,
+                None => Pair {
+                    i,
+                    j,
+                    shear: Vec3::zeros(),
+                    fn_prev: 0.0,
+                    // LIGGGHTS starts a pair's history at zero radii: the contact point sits at
+                    // the centre and receives no multi-contact term until the pair is evaluated.
+                    ri_prev: 0.0,
+                    rj_prev: 0.0,
+                    dri: 0.0,
+                    drj: 0.0,
+                },
+            });
+        }
+        self.x_build.clear();
+        self.x_build.extend_from_slice(&self.p.x);
+        Ok(())
+    }
+
+    /// Finds the wall elements each particle is close to and carries their history over.
+    fn update_wall_contacts(&mut self) {
+        std::mem::swap(&mut self.wc, &mut self.wc_old);
+        self.wc.clear();
+        let reach_factor = self.mc_range;
+        let mut k = 0;
+        let p = &self.p;
+        for i in 0..p.len() {
+            let x = p.x[i];
+            let reach = p.radius[i] * reach_factor;
+            for (w, wall) in self.walls.iter().enumerate() {
+                match &wall.geom {
+                    WallGeom::Plane(pl) => {
+                        let d = x[pl.axis] - pl.pos;
+                        if d.abs() < reach {
+                            let mut point = x;
+                            point[pl.axis] = pl.pos;
+                            push_merge(
+                                &mut self.wc,
+                                &self.wc_old,
+                                &mut k,
+                                WallContact {
+                                    p: i as u32,
+                                    wall: w as u32,
+                                    mesh: 0,
+                                    tri: 0,
+                                    point,
+                                    velocity: Vec3::zeros(),
+                                    shear: Vec3::zeros(),
+                                    fn_prev: 0.0,
+                                    rel_prev: Vec3::zeros(),
+                                    dr: 0.0,
+                                },
+                            );
+                        }
+                    }
+                    WallGeom::Meshes(list) => {
+                        for &mi in list {
+                            let m = &self.meshes[mi];
+                            if m.far(&x, reach) {
+                                continue;
+                            }
+                            for (t, tri) in m.tris.iter().enumerate() {
+                                if let Some(q) = mesh::closest_point(tri, &x) {
+                                    if (x - q).norm_squared() < reach * reach {
+                                        push_merge(
+                                            &mut self.wc,
+                                            &self.wc_old,
+                                            &mut k,
+                                            WallContact {
+                                                p: i as u32,
+                                                wall: w as u32,
+                                                mesh: mi as u32,
+                                                tri: t as u32,
+                                                point: q,
+                                                velocity: m.velocity,
+                                                shear: Vec3::zeros(),
+                                                fn_prev: 0.0,
+                                                rel_prev: Vec3::zeros(),
+                                                dr: 0.0,
+                                            },
+                                        );
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Multi-contact pass (LIGGGHTS `fix multicontact/halfspace` pre_force): radius change of
+    /// every particle at every one of its contacts from the previous step's normal forces.
+    fn multicontact(&mut self) -> Result<(), StepError> {
+        let n = self.p.len();
+        let domain = self.domain.expect("domain checked in setup");
+        for pr in &mut self.pairs {
+            pr.dri = 0.0;
+            pr.drj = 0.0;
+        }
+        for c in &mut self.wc {
+            c.dr = 0.0;
+        }
+        // Count contacts per particle, and flag particles with a loaded contact: only those
+        // (with two or more contacts) do any multi-contact work.
+        self.slot_start.clear();
+        self.slot_start.resize(n + 1, 0);
+        self.loaded.clear();
+        self.loaded.resize(n, false);
+        let eps = |i: usize, s: &Self| {
+            let m = &s.mc_types[s.p.typ[i]].material;
+            m.youngs_modulus
+                * s.p.radius[i]
+                * s.p.radius[i]
+                * crate::physics::contact_set::LOADED_FORCE_FACTOR
+        };
+        // A pair takes part only if loaded or close enough that radius growth could make it touch
+        // (gap below RECEIVER_GAP of the radii): far candidates would only cost kernel time.
+        self.pair_mc.clear();
+        for pr in &self.pairs {
+            let (i, j) = (pr.i as usize, pr.j as usize);
+            let mut d = self.p.x[i] - self.p.x[j];
+            domain.minimum_image(&mut d);
+            let reach = (1.0 + RECEIVER_GAP) * (self.p.radius[i] + self.p.radius[j]);
+            self.pair_mc.push(pr.fn_prev > 0.0 || d.norm_squared() < reach * reach);
+        }
+        for (pr, _) in self.pairs.iter().zip(&self.pair_mc).filter(|(_, m)| **m) {
+            let (i, j) = (pr.i as usize, pr.j as usize);
+            self.slot_start[i + 1] += 1;
+            self.slot_start[j + 1] += 1;
+            if pr.fn_prev > 0.0 {
+                self.loaded[i] = true;
+                self.loaded[j] = true;
+            }
+        }
+        for c in &self.wc {
+            self.slot_start[c.p as usize + 1] += 1;
+            if c.fn_prev > 0.0 {
+                self.loaded[c.p as usize] = true;
+            }
+        }
+        for i in 0..n {
+            self.slot_start[i + 1] += self.slot_start[i];
+        }
+        let total = self.slot_start[n] as usize;
+        self.slots.clear();
+        self.slots.resize(total, Slot::Wall(0));
+        self.slot_fill.clear();
+        self.slot_fill.extend_from_slice(&self.slot_start[..n]);
+        for (k, pr) in self.pairs.iter().enumerate() {
+            if !self.pair_mc[k] {
+                continue;
+            }
+            let (i, j) = (pr.i as usize, pr.j as usize);
+            self.slots[self.slot_fill[i] as usize] = Slot::PairI(k as u32);
+            self.slot_fill[i] += 1;
+            self.slots[self.slot_fill[j] as usize] = Slot::PairJ(k as u32);
+            self.slot_fill[j] += 1;
+        }
+        for (k, c) in self.wc.iter().enumerate() {
+            let i = c.p as usize;
+            self.slots[self.slot_fill[i] as usize] = Slot::Wall(k as u32);
+            self.slot_fill[i] += 1;
+        }
+        for i in 0..n {
+            let (s0, s1) = (self.slot_start[i] as usize, self.slot_start[i + 1] as usize);
+            if s1 - s0 < 2 || !self.loaded[i] {
+                continue;
+            }
+            self.loads.clear();
+            for s in &self.slots[s0..s1] {
+                let (point, force) = match *s {
+                    Slot::PairI(k) | Slot::PairJ(k) => {
+                        let pr = &self.pairs[k as usize];
+                        let (a, b) = (pr.i as usize, pr.j as usize);
+                        let mut xab = self.p.x[b] - self.p.x[a];
+                        domain.minimum_image(&mut xab);
+                        let len = xab.norm().max(1e-300);
+                        let eps_a = eps(a, self);
+                        // Contact point as LIGGGHTS: midpoint of the modified spheres' surfaces
+                        // along the centre line when loaded, else the own surface point.
+                        let rel = if pr.fn_prev > eps_a {
+                            let tmp = xab * ((pr.ri_prev - pr.rj_prev) * 0.5 / len);
+                            if matches!(s, Slot::PairI(_)) {
+                                tmp + 0.5 * xab
+                            } else {
+                                tmp - 0.5 * xab
+                            }
+                        } else if matches!(s, Slot::PairI(_)) {
+                            xab * (pr.ri_prev / len)
+                        } else {
+                            -xab * (pr.rj_prev / len)
+                        };
+                        (rel, pr.fn_prev)
+                    }
+                    Slot::Wall(k) => {
+                        let c = &self.wc[k as usize];
+                        (c.rel_prev, c.fn_prev)
+                    }
+                };
+                self.loads.push(ContactLoad { point, force });
+            }
+            let m = self.mc_types[self.p.typ[i]].material;
+            let params = McParams {
+                radius: self.p.radius[i],
+                youngs_modulus: m.youngs_modulus,
+                poisson_ratio: m.poisson_ratio,
+                gamma: m.gamma,
+                cap: m.cap,
+            };
+            let nl = self.loads.len();
+            if self.dr_buf.len() < nl {
+                self.dr_buf.resize(nl, 0.0);
+            }
+            if self.fb_buf.len() < nl {
+                self.fb_buf.resize(nl, false);
+            }
+            let res = radius_changes(&params, &self.loads, &mut self.dr_buf[..nl], &mut self.fb_buf[..nl]);
+            res.map_err(|e| StepError {
+                step: self.step,
+                particle: self.p.id[i],
+                cause: format!("multi-contact kernel: {e}"),
+            })?;
+            for (s, &d) in self.slots[s0..s1].iter().zip(&self.dr_buf[..nl]) {
+                match *s {
+                    Slot::PairI(k) => self.pairs[k as usize].dri = d,
+                    Slot::PairJ(k) => self.pairs[k as usize].drj = d,
+                    Slot::Wall(k) => self.wc[k as usize].dr = d,
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Force and torque on every particle and force on every mesh. `update` = false is the
+    /// set-up pass of a run: the contact history is not advanced (LIGGGHTS `shearupdate` off).
+    fn compute_forces(&mut self, update: bool) -> Result<(), StepError> {
+        let n = self.p.len();
+        let domain = self.domain.expect("domain checked in setup");
+        for i in 0..n {
+            self.p.f[i] = Vec3::zeros();
+            self.p.torque[i] = Vec3::zeros();
+        }
+        // LIGGGHTS does not clear the mesh force before the set-up pass, so the first thermo line
+        // of a run shows the previous step's force plus the set-up force; do the same so the
+        // outputs match line by line (the dynamics never read this sum).
+        if update {
+            for m in &mut self.meshes {
+                m.force = Vec3::zeros();
+            }
+        }
+        self.update_wall_contacts();
+        let mc = self.closure == Some(Closure::MultiContact);
+        if mc {
+            self.multicontact()?;
+        }
+        let dt = if update { self.dt } else { 0.0 };
+        let nt = self.ntypes;
+        // Pairs: evaluated independently (in parallel when it pays), then scattered in pair order,
+        // so the sums are bit-identical whatever the number of threads.
+        let ctx = PairCtx {
+            p: &self.p,
+            coeffs: &self.coeffs,
+            nt,
+            domain,
+            dt,
+            update,
+            step: self.step,
+            liggghts_radii: self.liggghts_radii,
+        };
+        if self.parallel && self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
+            use rayon::prelude::*;
+            self.pair_out.clear();
+            self.pair_out.resize(self.pairs.len(), None);
+            self.pairs
+                .par_iter_mut()
+                .zip(self.pair_out.par_iter_mut())
+                .with_min_len(256)
+                .try_for_each(|(pr, out)| ctx.eval(pr).map(|r| *out = r))?;
+            for (pr, out) in self.pairs.iter().zip(&self.pair_out) {
+                if let Some((fi, ti, tj)) = out {
+                    let (i, j) = (pr.i as usize, pr.j as usize);
+                    self.p.f[i] += fi;
+                    self.p.f[j] -= fi;
+                    self.p.torque[i] += ti;
+                    self.p.torque[j] += tj;
+                }
+            }
+        } else {
+            // Same accumulation order as the parallel path: identical sums.
+            let (f, torque) = (&mut self.f_buf, &mut self.t_buf);
+            f.clear();
+            f.resize(n, Vec3::zeros());
+            torque.clear();
+            torque.resize(n, Vec3::zeros());
+            for pr in self.pairs.iter_mut() {
+                if let Some((fi, ti, tj)) = ctx.eval(pr)? {
+                    let (i, j) = (pr.i as usize, pr.j as usize);
+                    f[i] += fi;
+                    f[j] -= fi;
+                    torque[i] += ti;
+                    torque[j] += tj;
+                }
+            }
+            std::mem::swap(&mut self.p.f, &mut self.f_buf);
+            std::mem::swap(&mut self.p.torque, &mut self.t_buf);
+        }
+        // Body forces come next, then the walls (the order of the example decks' fixes).
+        if let Some(g) = self.gravity {
+            for i in 0..n {
+                self.p.f[i] += self.p.mass[i] * g;
+            }
+        }
+        for c in self.wc.iter_mut() {
+            let i = c.p as usize;
+            let wall_type = match &self.walls[c.wall as usize].geom {
+                WallGeom::Plane(pl) => pl.wall_type,
+                WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
+            };
+            let bi = Body {
+                x: self.p.x[i],
+                v: self.p.v[i],
+                omega: self.p.omega[i],
+                radius: self.p.radius[i],
+                mass: self.p.mass[i],
+            };
+            let wp = WallPoint { point: c.point, velocity: c.velocity };
+            let coeff = &self.coeffs[self.p.typ[i] * nt + wall_type];
+            let mut shear = c.shear;
+            let r = particle_wall(coeff, &bi, &wp, c.dr, dt, &mut shear)
+                .map_err(|e| contact_error(self.step, self.p.id[i], None, e))?;
+            let fnorm = match r {
+                Some(cf) => {
+                    self.p.f[i] += cf.force_i;
+                    self.p.torque[i] += cf.torque_i;
+                    if let WallGeom::Meshes(_) = self.walls[c.wall as usize].geom {
+                        self.meshes[c.mesh as usize].force -= cf.force_i;
+                    }
+                    cf.force_i.dot(&cf.en).abs()
+                }
+                None => 0.0,
+            };
+            if update {
+                c.shear = shear;
+                c.fn_prev = fnorm;
+                let rel = c.point - self.p.x[i];
+                c.rel_prev = if fnorm > 0.0 {
+                    rel
+                } else {
+                    let l = rel.norm();
+                    if l > 0.0 {
+                        rel * ((self.p.radius[i] + c.dr) / l)
+                    } else {
+                        Vec3::zeros()
+                    }
+                };
+            }
+        }
+        Ok(())
+    }
+
+    /// Translational kinetic energy ½ Σ m v² [J] (thermo `ke`).
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self.p.v.iter().zip(&self.p.mass).map(|(v, m)| v.norm_squared() * m).sum::<f64>()
+    }
+
+    /// Rotational kinetic energy ½ Σ I ω² [J] (`compute erotate/sphere`).
+    pub fn rotational_energy(&self) -> f64 {
+        0.5 * INERTIA
+            * (0..self.p.len())
+                .map(|i| {
+                    self.p.omega[i].norm_squared() * self.p.radius[i] * self.p.radius[i] * self.p.mass[i]
+                })
+                .sum::<f64>()
+    }
+
+    /// Elastic energy stored in the contacts, Σ (2/5) k_n δ² (Hertz potential, undamped part).
+    /// Used by the energy-conservation checks; exact for Hertz without multi-contact.
+    pub fn elastic_energy(&self) -> f64 {
+        let domain = match self.domain {
+            Some(d) => d,
+            None => return 0.0,
+        };
+        let mut e = 0.0;
+        let nt = self.ntypes;
+        for pr in &self.pairs {
+            let (i, j) = (pr.i as usize, pr.j as usize);
+            let mut d = self.p.x[i] - self.p.x[j];
+            domain.minimum_image(&mut d);
+            let (ri, rj) = (self.p.radius[i], self.p.radius[j]);
+            let delta = ri + rj - d.norm();
+            if delta > 0.0 {
+                let c = &self.coeffs[self.p.typ[i] * nt + self.p.typ[j]];
+                let reff = ri * rj / (ri + rj);
+                e += 0.4 * crate::physics::hertz::hertz_force(c.e_star, reff, delta) * delta;
+            }
+        }
+        for c in &self.wc {
+            let i = c.p as usize;
+            let delta = self.p.radius[i] - (self.p.x[i] - c.point).norm();
+            if delta > 0.0 {
+                let wt = match &self.walls[c.wall as usize].geom {
+                    WallGeom::Plane(pl) => pl.wall_type,
+                    WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
+                };
+                let co = &self.coeffs[self.p.typ[i] * nt + wt];
+                e += 0.4 * crate::physics::hertz::hertz_force(co.e_star, self.p.radius[i], delta) * delta;
+            }
+        }
+        e
+    }
+
+    /// Number of touching contacts: particle pairs and particle–wall.
+    pub fn contact_counts(&self) -> (usize, usize) {
+        let pp = self.pairs.iter().filter(|p| p.fn_prev > 0.0).count();
+        let pw = self.wc.iter().filter(|c| c.fn_prev > 0.0).count();
+        (pp, pw)
+    }
+
+    /// Registers a per-type material table and the pair restitution/friction matrices.
+    pub fn set_materials(
+        &mut self,
+        materials: Vec<Material>,
+        restitution: &[f64],
+        friction: &[f64],
+    ) -> Result<(), String> {
+        let nt = materials.len();
+        if restitution.len() != nt * nt || friction.len() != nt * nt {
+            return Err(format!("peratomtypepair tables must have {nt}×{nt} entries"));
+        }
+        let mut coeffs = Vec::with_capacity(nt * nt);
+        for a in 0..nt {
+            for b in 0..nt {
+                coeffs.push(
+                    PairCoeffs::new(
+                        &materials[a],
+                        &materials[b],
+                        restitution[a * nt + b],
+                        friction[a * nt + b],
+                    )
+                    .map_err(|e| format!("types {} and {}: {e}", a + 1, b + 1))?,
+                );
+            }
+        }
+        self.ntypes = nt;
+        self.materials = materials;
+        self.coeffs = coeffs;
+        Ok(())
+    }
+}
+
+/// Relative gap (fraction of r_i + r_j) within which an unloaded pair still receives a
+/// multi-contact radius change: growth beyond 5 % of both radii is outside the model's range.
+const RECEIVER_GAP: f64 = 0.1;
+
+/// Steps between two serial-vs-threads timing probes, and the length of each probe window.
+const TUNE_PERIOD: u64 = 5000;
+const TUNE_WINDOW: u64 = 50;
+
+/// Below this many candidate pairs a step is too short for threads to pay off.
+const PARALLEL_MIN_PAIRS: usize = 1024;
+
+/// Read-only view of the state that one pair evaluation needs (shared between threads).
+struct PairCtx<'a> {
+    p: &'a Particles,
+    coeffs: &'a [PairCoeffs],
+    nt: usize,
+    domain: Domain,
+    dt: f64,
+    update: bool,
+    step: u64,
+    liggghts_radii: bool,
+}
+
+type PairForce = Option<(Vec3, Vec3, Vec3)>;
+
+impl PairCtx<'_> {
+    /// Force on i, torques on i and j of one pair (None when not touching); updates the pair's
+    /// history when `update`.
+    #[inline]
+    fn eval(&self, pr: &mut Pair) -> Result<PairForce, StepError> {
+        let p = self.p;
+        let (i, j) = (pr.i as usize, pr.j as usize);
+        let mut d = p.x[i] - p.x[j];
+        self.domain.minimum_image(&mut d);
+        let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
+        let radsum = ri + rj;
+        if d.norm_squared() >= radsum * radsum {
+            if self.update {
+                pr.shear = Vec3::zeros();
+                pr.fn_prev = 0.0;
+                pr.ri_prev = ri;
+                pr.rj_prev = rj;
+            }
+            return Ok(None);
+        }
+        let bi = Body { x: p.x[i], v: p.v[i], omega: p.omega[i], radius: p.radius[i], mass: p.mass[i] };
+        let mut bj =
+            Body { x: p.x[i] - d, v: p.v[j], omega: p.omega[j], radius: p.radius[j], mass: p.mass[j] };
+        let mut dri = pr.dri;
+        let mut ri_stored = ri;
+        if self.liggghts_radii && pr.dri != 0.0 {
+            // LIGGGHTS 3.8 `surface multicontact` keeps particle i's original radius in R_eff and
+            // in its lever arm (only the overlap sees r_i + Δ). Same effect through the physics
+            // core: original r_i, and j moved Δ_i closer along the normal.
+            let r = d.norm();
+            if r > pr.dri {
+                bj.x = p.x[i] - d * ((r - pr.dri) / r);
+                dri = 0.0;
+                ri_stored = p.radius[i];
+            }
+        }
+        let c = &self.coeffs[p.typ[i] * self.nt + p.typ[j]];
+        let mut shear = pr.shear;
+        let r = particle_particle(c, &bi, &bj, dri, pr.drj, self.dt, &mut shear)
+            .map_err(|e| contact_error(self.step, p.id[i], Some(p.id[j]), e))?;
+        let (out, fnorm) = match r {
+            Some(cf) => (Some((cf.force_i, cf.torque_i, cf.torque_j)), cf.force_i.dot(&cf.en).abs()),
+            None => (None, 0.0),
+        };
+        if self.update {
+            pr.shear = shear;
+            pr.fn_prev = fnorm;
+            pr.ri_prev = ri_stored;
+            pr.rj_prev = rj;
+        }
+        Ok(out)
+    }
+}
+
+fn push_merge(out: &mut Vec<WallContact>, old: &[WallContact], k: &mut usize, mut c: WallContact) {
+    let key = c.key();
+    while *k < old.len() && old[*k].key() < key {
+        *k += 1;
+    }
+    if let Some(o) = old.get(*k) {
+        if o.key() == key {
+            c.shear = o.shear;
+            c.fn_prev = o.fn_prev;
+            c.rel_prev = o.rel_prev;
+        }
+    }
+    out.push(c);
+}
+
+fn contact_error(step: u64, particle: i64, other: Option<i64>, e: ContactError) -> StepError {
+    let with = match other {
+        Some(j) => format!("contact with particle {j}"),
+        None => "wall contact".to_string(),
+    };
+    StepError { step, particle, cause: format!("{with}: {e}") }
+}

@@ -1,0 +1,69 @@
+//! Deck reader behaviour: unknown input stops with FILE:LINE, output-only commands are skipped with
+//! a warning, -var overrides index variables, bad values are named.
+
+use std::process::Command;
+
+fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("in.test");
+    std::fs::write(&deck, text).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+        .current_dir(dir.path())
+        .arg("run")
+        .arg(&deck)
+        .args(extra)
+        .args(["-log", "none"])
+        .output()
+        .unwrap();
+    let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    (o.status.success(), all)
+}
+
+const BASE: &str = "units si
+atom_style sphere
+boundary f f f
+region box block -0.01 0.01 -0.01 0.01 -0.01 0.01 units box
+create_box 1 box
+neighbor 0.0002 bin
+fix m1 all property/global youngsModulus peratomtype 5e6
+fix m2 all property/global poissonsRatio peratomtype 0.3
+fix m3 all property/global coefficientRestitution peratomtypepair 1 0.8
+fix m4 all property/global coefficientFriction peratomtypepair 1 0.3
+pair_style gran model hertz tangential history
+pair_coeff * *
+timestep 1e-6
+create_atoms 1 single 0 0 0 units box
+set atom 1 diameter 0.002 density 1000
+fix integr all nve/sphere
+";
+
+#[test]
+fn unknown_command_names_file_and_line() {
+    let (ok, out) = run_deck(&format!("{BASE}fix x all wiggle/foo 1\nrun 10\n"), &[]);
+    assert!(!ok);
+    assert!(out.contains("ERROR: ") && out.contains("in.test:17: unsupported fix style wiggle/foo"), "{out}");
+    let (ok, out) = run_deck(&format!("{BASE}frobnicate\n"), &[]);
+    assert!(!ok && out.contains("in.test:17: unsupported command frobnicate"), "{out}");
+}
+
+#[test]
+fn vtk_dumps_are_skipped_with_a_warning() {
+    let (ok, out) = run_deck(&format!("{BASE}dump d all custom/vtk 10 post/x*.vtk id x\nrun 10\n"), &[]);
+    assert!(ok, "{out}");
+    assert!(out.contains("WARNING: dump d (custom/vtk) is not written"), "{out}");
+}
+
+#[test]
+fn var_on_the_command_line_overrides_index_variables() {
+    let text = format!("{BASE}variable n index 5\nprint \"steps ${{n}}\"\nrun ${{n}}\n");
+    let (ok, out) = run_deck(&text, &["-var", "n", "7"]);
+    assert!(ok, "{out}");
+    assert!(out.contains("steps 7") && out.contains("for 7 steps"), "{out}");
+}
+
+#[test]
+fn bad_material_value_is_named() {
+    let text = BASE.replace("poissonsRatio peratomtype 0.3", "poissonsRatio peratomtype 0.7") + "run 1\n";
+    let (ok, out) = run_deck(&text, &[]);
+    assert!(!ok && out.contains("poisson_ratio") && out.contains("0.7"), "{out}");
+}
