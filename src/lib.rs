@@ -8,4 +8,5 @@
 pub mod checks;
 pub mod contacts_cli;
 pub mod ffi;
+pub mod nonlocal;
 pub mod physics;

@@ -20,6 +20,17 @@ enum Command {
         /// JSON file, or - for standard input
         file: String,
     },
+    /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path
+    Nonlocal {
+        /// Scene file (JSON, see docs/nonlocal.md)
+        scene: PathBuf,
+        /// Per-step CSV output (default: standard output)
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Also write every contact force, one CSV per step, into this directory
+        #[arg(long)]
+        contacts: Option<PathBuf>,
+    },
     /// Run the validation suite and write the report
     Validate {
         /// Quick subset (CI)
@@ -67,10 +78,25 @@ fn validate(_quick: bool, out: PathBuf) -> Result<(), String> {
     Ok(())
 }
 
+fn nonlocal(scene: PathBuf, out: Option<PathBuf>, contacts: Option<PathBuf>) -> Result<(), String> {
+    let mut scene = mcdem::nonlocal::scene::Scene::load(&scene)?;
+    let mut sink: Box<dyn std::io::Write> = match &out {
+        Some(p) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(p).map_err(|e| format!("cannot create {}: {e}", p.display()))?,
+        )),
+        None => Box::new(std::io::stdout().lock()),
+    };
+    let summary = scene.run(&mut *sink, contacts.as_deref(), &mut |line| eprintln!("{line}"))?;
+    sink.flush().map_err(|e| format!("cannot write output: {e}"))?;
+    eprintln!("done: {} load steps in {:.2} s", summary.steps, summary.wall_seconds);
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Contacts { file } => contacts(&file),
+        Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Validate { quick, out } => validate(quick, out),
     };
     match result {
