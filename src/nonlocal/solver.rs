@@ -10,8 +10,9 @@
 //! e_ic is the unit vector from the centre of i toward contact c, γ_c the geometric overlap, δ_c the
 //! local Hertz overlap (γ_c minus the nonlocal approach). The unknowns are the centres and δ_c
 //! rather than P_c: dγ/dP = (2/3)γ/P is infinite at P = 0, while dP/dδ = (3/2)K√δ is finite, so the
-//! Jacobian stays bounded for contacts that are just closing. During iterations P(δ) is continued
-//! as K·sign(δ)|δ|^{3/2} (smooth, odd); a converged contact with δ < 0 is released by the active set.
+//! Jacobian stays bounded for contacts that are just closing. P(δ) = K max(δ, 0)^{3/2} is C¹, so
+//! contacts that open during the iterations carry no force; a converged contact with δ < 0 is
+//! released by the active set, a closing pair is added to it.
 //!
 //! Newton's method with the exact Jacobian (including the motion of the contact directions inside
 //! G), assembled as triplets and factorised by a sparse LU with partial pivoting (faer): the system is
@@ -177,6 +178,14 @@ struct Eval {
     worst: usize,
 }
 
+/// Pseudo-transient continuation (Kelley & Keyes, SIAM J. Numer. Anal. 35 (1998) 508): when the
+/// Newton step fails its line search, a drag σ·k_ref·I is added to the position block of the Jacobian
+/// (residual untouched), making the step a damped relaxation; σ shrinks with the residual (switched
+/// evolution relaxation) and Newton is recovered near the solution.
+const PTC_START: f64 = 1.0;
+const PTC_MAX: f64 = 1e10;
+const PTC_OFF: f64 = 1e-6;
+
 /// The nonlocal static solver: scene, current state (centres, active contacts) and controls.
 pub struct Nonlocal {
     len: f64,
@@ -317,12 +326,16 @@ impl Nonlocal {
         }
     }
 
-    /// P(δ) continued as K·sign(δ)|δ|^{3/2}, and dP/dδ.
+    /// Hertz P(δ) = K max(δ, 0)^{3/2} and dP/dδ (Hertz, Eq. 5 static part). C¹ at δ = 0, so a
+    /// contact that opens during the iterations simply stops carrying force (no artificial tension)
+    /// while its relation row keeps tracking the gap, and it re-engages if the gap closes again.
     #[inline]
     fn force_of(c: &Contact, delta: f64) -> (f64, f64) {
-        let a = delta.abs();
-        let s = a.sqrt();
-        (c.k * a * s * delta.signum(), 1.5 * c.k * s)
+        if delta <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let s = delta.sqrt();
+        (c.k * delta * s, 1.5 * c.k * s)
     }
 
     /// Per particle: (contact index, sign) with e_sc = sign · e_c.
@@ -349,7 +362,7 @@ impl Nonlocal {
     }
 
     /// Residual (and Jacobian triplets) of the current active set at centres `x`, overlaps `delta`.
-    fn evaluate(&self, x: &[Vec3], delta: &[f64], adj: &[Vec<(usize, f64)>], jac: bool) -> Eval {
+    fn evaluate(&self, x: &[Vec3], delta: &[f64], adj: &[Vec<(usize, f64)>], jac: bool, shift: f64) -> Eval {
         let n = x.len();
         let nc = self.contacts.len();
         let row_c = |c: usize| 3 * n + c;
@@ -446,7 +459,7 @@ impl Nonlocal {
         // Tether of the rigid-body modes (Jacobian only).
         if jac {
             let k_ref = if nc > 0 && k_sum > 0.0 { k_sum / nc as f64 } else { 1.0 };
-            let eps = self.settings.regularisation * k_ref;
+            let eps = (self.settings.regularisation + shift) * k_ref;
             for i in 0..3 * n {
                 push(i, i, -eps);
             }
@@ -501,8 +514,10 @@ impl Nonlocal {
         let mut x = self.x.clone();
         let mut delta: Vec<f64> = self.contacts.iter().map(|c| c.delta).collect();
         let tol = self.settings.tolerance;
-        let mut ev = self.evaluate(&x, &delta, &adj, true);
+        let mut sigma = 0.0;
+        let mut ev = self.evaluate(&x, &delta, &adj, true, sigma);
         let mut iters = 0;
+        let max_iters = self.settings.max_newton;
         loop {
             if !(ev.force_rel.is_finite() && ev.relation_rel.is_finite()) {
                 return Err(self.fail("non-finite residual".into(), &ev));
@@ -510,12 +525,20 @@ impl Nonlocal {
             if ev.force_rel <= tol && ev.relation_rel <= tol {
                 break;
             }
-            if iters >= self.settings.max_newton {
+            if iters >= max_iters {
                 let e = self.fail(format!("Newton did not converge in {iters} iterations"), &ev);
                 self.store(x, &delta, iters);
                 return Err(e);
             }
             iters += 1;
+            if std::env::var_os("MCDEM_NONLOCAL_TRACE").is_some() {
+                eprintln!(
+                    "  newton {iters}: contacts {nc} force {:.3e} relation {:.3e} nnz {} sigma {sigma:.1e}",
+                    ev.force_rel,
+                    ev.relation_rel,
+                    ev.trip.len()
+                );
+            }
             let jm = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &ev.trip)
                 .map_err(|e| self.fail(format!("cannot assemble the Jacobian: {e:?}"), &ev))?;
             let lu = jm.sp_lu().map_err(|e| self.fail(format!("sparse LU failed: {e:?}"), &ev))?;
@@ -527,31 +550,45 @@ impl Nonlocal {
             }
             let m0 = Self::merit(&ev.res);
             let mut alpha = 1.0;
+            // Armijo backtracking for the Newton step; with continuation on, a plain decrease
+            // within four halvings (the shifted step is not a descent direction of the merit in general).
+            let min_alpha = if sigma > 0.0 { 1.0 / 16.0 } else { 1.0 / 4096.0 };
             let accepted = loop {
                 let xt: Vec<Vec3> = (0..n)
                     .map(|i| x[i] + alpha * Vec3::new(step[3 * i], step[3 * i + 1], step[3 * i + 2]))
                     .collect();
                 let dt: Vec<f64> = (0..nc).map(|c| delta[c] + alpha * step[3 * n + c]).collect();
-                let trial = self.evaluate(&xt, &dt, &adj, false);
+                let trial = self.evaluate(&xt, &dt, &adj, false, 0.0);
                 let m1 = Self::merit(&trial.res);
-                if m1.is_finite() && m1 <= (1.0 - 1e-4 * alpha) * m0 {
-                    break Some((xt, dt));
+                let armijo = if sigma > 0.0 { 1.0 } else { 1.0 - 1e-4 * alpha };
+                if m1.is_finite() && m1 < armijo * m0 {
+                    break Some((xt, dt, m1));
                 }
                 alpha *= 0.5;
-                if alpha < 1.0 / 4096.0 {
+                if alpha < min_alpha {
                     break None;
                 }
             };
             match accepted {
-                Some((xt, dt)) => {
+                Some((xt, dt, m1)) => {
                     x = xt;
                     delta = dt;
-                    ev = self.evaluate(&x, &delta, &adj, true);
+                    if sigma > 0.0 {
+                        sigma *= (m1 / m0).sqrt().max(0.01);
+                        if sigma < PTC_OFF {
+                            sigma = 0.0;
+                        }
+                    }
+                    ev = self.evaluate(&x, &delta, &adj, true, sigma);
                 }
                 None => {
-                    let e = self.fail(format!("line search failed at Newton iteration {iters}"), &ev);
-                    self.store(x, &delta, iters);
-                    return Err(e);
+                    sigma = if sigma == 0.0 { PTC_START } else { sigma * 10.0 };
+                    if sigma > PTC_MAX {
+                        let e = self.fail(format!("no descent at Newton iteration {iters}"), &ev);
+                        self.store(x, &delta, iters);
+                        return Err(e);
+                    }
+                    ev = self.evaluate(&x, &delta, &adj, true, sigma);
                 }
             }
         }
@@ -781,5 +818,87 @@ impl Nonlocal {
             }
         }
         (pp, pw)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nonlocal::kernel::KernelKind;
+
+    /// A small compressed cluster in a box with pair and wall contacts.
+    fn cluster(kind: KernelKind) -> Nonlocal {
+        let m = Material::hertz(1e4, 0.35).unwrap();
+        let wm = Material::hertz(1e7, 0.3).unwrap();
+        let pts = [
+            [0.95, 1.0, 0.9],
+            [2.75, 1.1, 1.0],
+            [1.9, 2.6, 1.05],
+            [1.85, 1.5, 2.55],
+            [0.9, 2.8, 2.7],
+            [2.9, 2.9, 2.8],
+        ];
+        let spheres: Vec<Sphere> = pts
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Sphere {
+                id: k as u64 + 1,
+                x: Vec3::from(*p),
+                radius: 1.0 + 0.05 * k as f64,
+                material: m,
+            })
+            .collect();
+        let walls = vec![
+            Wall { name: "a".into(), point: Vec3::zeros(), normal: Vec3::x() },
+            Wall { name: "b".into(), point: Vec3::zeros(), normal: Vec3::z() },
+            Wall { name: "c".into(), point: Vec3::new(3.8, 0.0, 0.0), normal: -Vec3::x() },
+        ];
+        let mut s = Nonlocal::new(&spheres, &walls, wm, Kernel::new(kind, 1.0).unwrap(), Settings::default())
+            .unwrap();
+        s.update_active_set();
+        for (k, c) in s.contacts.iter_mut().enumerate() {
+            c.delta = c.delta * 0.7 + 1e-3 * k as f64;
+        }
+        s
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let s = cluster(KernelKind::Boussinesq);
+        let nc = s.contacts.len();
+        assert!(nc >= 8, "cluster has only {nc} contacts");
+        let n = s.x.len();
+        let dim = 3 * n + nc;
+        let adj = s.adjacency();
+        let delta: Vec<f64> = s.contacts.iter().map(|c| c.delta).collect();
+        let ev = s.evaluate(&s.x, &delta, &adj, true, 0.0);
+        let mut dense = vec![vec![0.0; dim]; dim];
+        for t in &ev.trip {
+            dense[t.row][t.col] += t.val;
+        }
+        let h = 1e-7;
+        for col in 0..dim {
+            let (mut xp, mut xm) = (s.x.clone(), s.x.clone());
+            let (mut dp, mut dm) = (delta.clone(), delta.clone());
+            if col < 3 * n {
+                xp[col / 3][col % 3] += h;
+                xm[col / 3][col % 3] -= h;
+            } else {
+                dp[col - 3 * n] += h;
+                dm[col - 3 * n] -= h;
+            }
+            let rp = s.evaluate(&xp, &dp, &adj, false, 0.0).res;
+            let rm = s.evaluate(&xm, &dm, &adj, false, 0.0).res;
+            for row in 0..dim {
+                let fd = (rp[row] - rm[row]) / (2.0 * h);
+                let an = dense[row][col];
+                // The tether −ε·k_ref on the position diagonal is deliberately not in the residual.
+                let tether = if row == col && row < 3 * n { 1e-6 } else { 0.0 };
+                let tol = 1e-6 * (1.0 + fd.abs()) + tether;
+                if (an - fd).abs() > tol {
+                    panic!("J[{row}][{col}] = {an}, finite difference {fd}");
+                }
+            }
+        }
     }
 }
