@@ -159,12 +159,10 @@ fn find_box(walls: &[Wall]) -> Option<BoxWalls> {
 }
 
 fn box_lengths(b: &BoxWalls, walls: &[Wall]) -> [f64; 3] {
-    let mut l = [0.0; 3];
-    for a in 0..3 {
+    std::array::from_fn(|a| {
         let (lo, hi) = b.pairs[a];
-        l[a] = walls[hi].point[a] - walls[lo].point[a];
-    }
-    l
+        walls[hi].point[a] - walls[lo].point[a]
+    })
 }
 
 /// What a run produced.

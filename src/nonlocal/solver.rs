@@ -233,7 +233,7 @@ impl Nonlocal {
         let mut ws = Vec::with_capacity(walls.len());
         for w in walls {
             let n = w.normal.norm();
-            if !finite3(&w.point) || !finite3(&w.normal) || !(n > 0.0) {
+            if !finite3(&w.point) || !finite3(&w.normal) || n.is_nan() || n <= 0.0 {
                 return Err(format!("wall '{}': point and a non-zero normal must be finite", w.name));
             }
             ws.push(Wall { name: w.name.clone(), point: w.point, normal: w.normal / n });
@@ -655,7 +655,7 @@ impl Nonlocal {
                     continue;
                 }
                 let g = self.geometry(&self.x, i, other);
-                if g.gamma < -margin || !(g.d > 0.0) {
+                if g.gamma < -margin || g.d.is_nan() || g.d <= 0.0 {
                     continue;
                 }
                 let trial =
