@@ -10,5 +10,6 @@ pub mod contacts_cli;
 pub mod deck;
 pub mod engine;
 pub mod ffi;
+pub mod nonlocal;
 pub mod physics;
 pub mod validate;

@@ -33,6 +33,16 @@ enum Command {
         /// No progress bar even on a terminal
         #[arg(long)]
         no_progress: bool,
+    /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path
+    Nonlocal {
+        /// Scene file (JSON, see docs/nonlocal.md)
+        scene: PathBuf,
+        /// Per-step CSV output (default: standard output)
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Also write every contact force, one CSV per step, into this directory
+        #[arg(long)]
+        contacts: Option<PathBuf>,
     },
     /// Run the validation suite and write the report
     Validate {
@@ -94,12 +104,27 @@ fn liggghts_args() -> Vec<String> {
         .collect()
 }
 
+fn nonlocal(scene: PathBuf, out: Option<PathBuf>, contacts: Option<PathBuf>) -> Result<(), String> {
+    let mut scene = mcdem::nonlocal::scene::Scene::load(&scene)?;
+    let mut sink: Box<dyn std::io::Write> = match &out {
+        Some(p) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(p).map_err(|e| format!("cannot create {}: {e}", p.display()))?,
+        )),
+        None => Box::new(std::io::stdout().lock()),
+    };
+    let summary = scene.run(&mut *sink, contacts.as_deref(), &mut |line| eprintln!("{line}"))?;
+    sink.flush().map_err(|e| format!("cannot write output: {e}"))?;
+    eprintln!("done: {} load steps in {:.2} s", summary.steps, summary.wall_seconds);
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse_from(liggghts_args());
     let result = match cli.command {
         Command::Contacts { file } => contacts(&file),
         Command::Validate { quick, cases, out } => validate(quick, cases, out),
         Command::Run { deck, var, log, no_progress } => run(deck, var, log, no_progress),
+        Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

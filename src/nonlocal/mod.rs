@@ -1,0 +1,16 @@
+//! Nonlocal quasi-static reference (Gonzalez & Cuitiño, J. Mech. Phys. Solids 60 (2012) 333;
+//! SPEC §4): static equilibrium of elastic, frictionless spheres between rigid walls, where each
+//! contact force deforms its particle at all the particle's other contacts.
+//!
+//! - [`kernel`]: the compliance G of one particle's surface at one contact to the load at another
+//!   (`boussinesq`, `none`; `sphere` is refused until it is implemented and verified).
+//! - [`solver`]: Newton with an exact sparse Jacobian, active set, line search and load stepping.
+//! - [`scene`]: the JSON scene format, the LIGGGHTS data-file reader and the CSV-writing driver
+//!   behind `mcdem nonlocal SCENE` (documented in `docs/nonlocal.md`).
+
+pub mod kernel;
+pub mod scene;
+pub mod solver;
+
+pub use kernel::{Kernel, KernelKind};
+pub use solver::{ContactState, Nonlocal, Other, Settings, SolveError, Sphere, StepStats, Wall};

@@ -1,0 +1,904 @@
+//! Static equilibrium of elastic, frictionless spheres between rigid plane walls with the nonlocal
+//! contact relation of Gonzalez & Cuitiño (2012) (SPEC §4):
+//!
+//! ```text
+//! force balance, particle i:   Σ_{c ∈ C_i} −P_c e_ic = 0
+//! contact c = (i, j):          γ_c(x) − δ_c − Σ_{k ∈ C_i, k≠c} G_i(c,k) P_k − Σ_{l ∈ C_j, l≠c} G_j(c,l) P_l = 0
+//!                              P_c = (4/3) E*_c √R*_c δ_c^{3/2}
+//! ```
+//!
+//! e_ic is the unit vector from the centre of i toward contact c, γ_c the geometric overlap, δ_c the
+//! local Hertz overlap (γ_c minus the nonlocal approach). The unknowns are the centres and δ_c
+//! rather than P_c: dγ/dP = (2/3)γ/P is infinite at P = 0, while dP/dδ = (3/2)K√δ is finite, so the
+//! Jacobian stays bounded for contacts that are just closing. P(δ) = K max(δ, 0)^{3/2} is C¹, so
+//! contacts that open during the iterations carry no force; a converged contact with δ < 0 is
+//! released by the active set, a closing pair is added to it.
+//!
+//! Newton's method with the exact Jacobian (including the motion of the contact directions inside
+//! G), assembled as triplets and factorised by a sparse LU with partial pivoting (faer): the system is
+//! nonsymmetric and indefinite (compressive contacts soften the geometric stiffness), which rules out
+//! Cholesky and LDLᵀ without pivoting, and dense LU is O(n³) for n ≈ 3N + N_c.
+//!
+//! Rigid-body modes: a sphere with fewer than three non-coplanar contacts (a rattler, or one held
+//! by two contacts) has translations with no stiffness, which makes J singular. Every particle's
+//! position block of J gets a weak tether −ε·k_ref·I (ε = `Settings::regularisation`, k_ref the
+//! mean contact stiffness dP/dγ). Only the Jacobian is modified, never the residual, so a converged
+//! state is an exact equilibrium; free particles simply do not move (their residual is zero).
+//!
+//! Internally lengths are in units of the mean radius and forces in E_ref·L² (E_ref the largest
+//! particle modulus), so the Newton merit function weighs force balance and overlaps alike.
+
+use std::fmt;
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::Mat;
+
+use super::kernel::Kernel;
+use crate::physics::material::{Material, PairCoeffs};
+use crate::physics::Vec3;
+
+/// Smallest reference force for the relative force-balance residual, in units of E_ref·L².
+const FORCE_FLOOR: f64 = 1e-12;
+
+/// One sphere of the scene (SI units).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sphere {
+    /// Identifier reported in outputs and errors (the LIGGGHTS atom id, or the 1-based index).
+    pub id: u64,
+    /// Centre [m].
+    pub x: Vec3,
+    /// Radius [m].
+    pub radius: f64,
+    /// Elastic constants (E, ν); the multi-contact fields are ignored here.
+    pub material: Material,
+}
+
+/// A rigid plane wall: the half-space `(y − point)·normal ≥ 0` is the inside of the box.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Wall {
+    pub name: String,
+    /// A point of the plane [m].
+    pub point: Vec3,
+    /// Unit normal pointing into the domain.
+    pub normal: Vec3,
+}
+
+/// Solver controls.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Convergence: max |net force on a particle| / mean contact force, and max relation residual
+    /// / mean radius, both below this.
+    pub tolerance: f64,
+    /// Newton iterations per active-set round.
+    pub max_newton: usize,
+    /// Active-set rounds (solve, release tensile, add closing) per load increment.
+    pub max_active_rounds: usize,
+    /// How many times a failing load increment may be halved.
+    pub max_subdivisions: u32,
+    /// ε of the Jacobian tether (see the module documentation).
+    pub regularisation: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-9,
+            max_newton: 60,
+            max_active_rounds: 60,
+            max_subdivisions: 8,
+            regularisation: 1e-8,
+        }
+    }
+}
+
+/// The other body of a contact.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Other {
+    Particle(usize),
+    Wall(usize),
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Contact {
+    i: usize,
+    other: Other,
+    /// Local Hertz overlap (scaled units).
+    delta: f64,
+    /// (4/3) E* √R* (scaled units).
+    k: f64,
+}
+
+/// One active contact in SI units, for output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactState {
+    /// Index of the first particle (0-based, order of the input).
+    pub i: usize,
+    pub other: Other,
+    /// Compressive normal force P [N].
+    pub force: f64,
+    /// Geometric overlap γ [m].
+    pub overlap: f64,
+    /// Local Hertz overlap δ [m] (γ minus the nonlocal approach).
+    pub hertz_overlap: f64,
+    /// Unit vector from the centre of i toward the contact.
+    pub direction: Vec3,
+}
+
+/// Counters of one solved load increment.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepStats {
+    pub newton_iterations: usize,
+    pub active_set_rounds: usize,
+    pub subdivisions: usize,
+    /// Force-balance residual: max over particles of |net force| / mean contact force.
+    pub residual: f64,
+    /// Max |relation residual| / mean radius.
+    pub relation_residual: f64,
+}
+
+/// A solve that did not converge: what, where, how far.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveError {
+    pub message: String,
+    /// Force-balance residual (relative) at the failure.
+    pub residual: f64,
+    /// Id of the particle with the largest net force.
+    pub worst_particle: Option<u64>,
+}
+
+impl fmt::Display for SolveError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} (force-balance residual {:.3e}", self.message, self.residual)?;
+        if let Some(id) = self.worst_particle {
+            write!(f, ", worst particle id {id}")?;
+        }
+        write!(f, ")")
+    }
+}
+
+impl std::error::Error for SolveError {}
+
+/// Geometry of one contact at the current centres.
+#[derive(Debug, Clone, Copy)]
+struct Geo {
+    /// Unit vector from the centre of i toward the contact.
+    e: Vec3,
+    /// Centre distance for a particle pair; ∞ for a wall (its direction does not move).
+    d: f64,
+    /// Geometric overlap γ.
+    gamma: f64,
+}
+
+struct Eval {
+    res: Vec<f64>,
+    trip: Vec<Triplet<usize, usize, f64>>,
+    force_rel: f64,
+    relation_rel: f64,
+    worst: usize,
+}
+
+/// Pseudo-transient continuation (Kelley & Keyes, SIAM J. Numer. Anal. 35 (1998) 508): when the
+/// Newton step fails its line search, a drag σ·k_ref·I is added to the position block of the Jacobian
+/// (residual untouched), making the step a damped relaxation; σ shrinks with the residual (switched
+/// evolution relaxation) and Newton is recovered near the solution.
+const PTC_START: f64 = 1.0;
+const PTC_MAX: f64 = 1e10;
+const PTC_OFF: f64 = 1e-6;
+
+/// The nonlocal static solver: scene, current state (centres, active contacts) and controls.
+pub struct Nonlocal {
+    len: f64,
+    e_ref: f64,
+    ids: Vec<u64>,
+    mats: Vec<Material>,
+    x: Vec<Vec3>,
+    r: Vec<f64>,
+    e: Vec<f64>,
+    nu: Vec<f64>,
+    walls: Vec<Wall>,
+    wall_material: Material,
+    kernel: Kernel,
+    settings: Settings,
+    contacts: Vec<Contact>,
+    /// Iterations of the last Newton solve, successful or not.
+    last_iterations: usize,
+}
+
+fn finite3(v: &Vec3) -> bool {
+    v.iter().all(|c| c.is_finite())
+}
+
+impl Nonlocal {
+    /// Validates the scene and sets up the solver with no active contact (the first [`Self::solve`]
+    /// finds them).
+    pub fn new(
+        spheres: &[Sphere],
+        walls: &[Wall],
+        wall_material: Material,
+        kernel: Kernel,
+        settings: Settings,
+    ) -> Result<Self, String> {
+        if spheres.is_empty() {
+            return Err("the scene has no particle".into());
+        }
+        for s in spheres {
+            if !finite3(&s.x) {
+                return Err(format!("particle {}: centre is not finite", s.id));
+            }
+            if !(s.radius.is_finite() && s.radius > 0.0) {
+                return Err(format!("particle {}: radius {} must be finite and > 0", s.id, s.radius));
+            }
+        }
+        let mut ws = Vec::with_capacity(walls.len());
+        for w in walls {
+            let n = w.normal.norm();
+            if !finite3(&w.point) || !finite3(&w.normal) || n.is_nan() || n <= 0.0 {
+                return Err(format!("wall '{}': point and a non-zero normal must be finite", w.name));
+            }
+            ws.push(Wall { name: w.name.clone(), point: w.point, normal: w.normal / n });
+        }
+        if !(settings.tolerance > 0.0 && settings.regularisation >= 0.0 && settings.max_newton > 0) {
+            return Err("invalid solver settings: tolerance > 0, regularisation >= 0, max_newton > 0".into());
+        }
+        let len = spheres.iter().map(|s| s.radius).sum::<f64>() / spheres.len() as f64;
+        let e_ref = spheres.iter().map(|s| s.material.youngs_modulus).fold(0.0, f64::max);
+        let mut me = Self {
+            len,
+            e_ref,
+            ids: spheres.iter().map(|s| s.id).collect(),
+            mats: spheres.iter().map(|s| s.material).collect(),
+            x: spheres.iter().map(|s| s.x / len).collect(),
+            r: spheres.iter().map(|s| s.radius / len).collect(),
+            e: spheres.iter().map(|s| s.material.youngs_modulus / e_ref).collect(),
+            nu: spheres.iter().map(|s| s.material.poisson_ratio).collect(),
+            walls: Vec::new(),
+            wall_material,
+            kernel,
+            settings,
+            contacts: Vec::new(),
+            last_iterations: 0,
+        };
+        me.walls =
+            ws.into_iter().map(|w| Wall { name: w.name, point: w.point / len, normal: w.normal }).collect();
+        Ok(me)
+    }
+
+    pub fn particle_count(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    pub fn walls(&self) -> Vec<Wall> {
+        self.walls
+            .iter()
+            .map(|w| Wall { name: w.name.clone(), point: w.point * self.len, normal: w.normal })
+            .collect()
+    }
+
+    /// Moves wall `w` so that its plane passes through `point` [m].
+    pub fn set_wall_point(&mut self, w: usize, point: Vec3) {
+        self.walls[w].point = point / self.len;
+    }
+
+    /// Centres [m].
+    pub fn positions(&self) -> Vec<Vec3> {
+        self.x.iter().map(|x| x * self.len).collect()
+    }
+
+    pub fn ids(&self) -> &[u64] {
+        &self.ids
+    }
+
+    fn force_unit(&self) -> f64 {
+        self.e_ref * self.len * self.len
+    }
+
+    /// (4/3) E* √R* for a new contact (scaled), E* from [`PairCoeffs`] (Eq. C.3).
+    fn stiffness(&self, i: usize, other: Other) -> f64 {
+        let (mj, rstar) = match other {
+            Other::Particle(j) => (self.mats[j], self.r[i] * self.r[j] / (self.r[i] + self.r[j])),
+            Other::Wall(_) => (self.wall_material, self.r[i]),
+        };
+        // Restitution 1 and friction 0 are placeholders: only E* is read.
+        let e_star = PairCoeffs::new(&self.mats[i], &mj, 1.0, 0.0).map(|c| c.e_star).unwrap_or(f64::NAN);
+        4.0 / 3.0 * e_star / self.e_ref * rstar.sqrt()
+    }
+
+    fn geometry(&self, x: &[Vec3], i: usize, other: Other) -> Geo {
+        match other {
+            Other::Particle(j) => {
+                let v = x[j] - x[i];
+                let d = v.norm();
+                Geo { e: v / d, d, gamma: self.r[i] + self.r[j] - d }
+            }
+            Other::Wall(w) => {
+                let wall = &self.walls[w];
+                Geo {
+                    e: -wall.normal,
+                    d: f64::INFINITY,
+                    gamma: self.r[i] - (x[i] - wall.point).dot(&wall.normal),
+                }
+            }
+        }
+    }
+
+    /// Hertz P(δ) = K max(δ, 0)^{3/2} and dP/dδ (Hertz, Eq. 5 static part). C¹ at δ = 0, so a
+    /// contact that opens during the iterations simply stops carrying force (no artificial tension)
+    /// while its relation row keeps tracking the gap, and it re-engages if the gap closes again.
+    #[inline]
+    fn force_of(c: &Contact, delta: f64) -> (f64, f64) {
+        if delta <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let s = delta.sqrt();
+        (c.k * delta * s, 1.5 * c.k * s)
+    }
+
+    /// Per particle: (contact index, sign) with e_sc = sign · e_c.
+    fn adjacency(&self) -> Vec<Vec<(usize, f64)>> {
+        let mut adj = vec![Vec::new(); self.x.len()];
+        for (c, ct) in self.contacts.iter().enumerate() {
+            adj[ct.i].push((c, 1.0));
+            if let Other::Particle(j) = ct.other {
+                adj[j].push((c, -1.0));
+            }
+        }
+        adj
+    }
+
+    fn other_particle(ct: &Contact, side: f64) -> Option<usize> {
+        if side > 0.0 {
+            match ct.other {
+                Other::Particle(j) => Some(j),
+                Other::Wall(_) => None,
+            }
+        } else {
+            Some(ct.i)
+        }
+    }
+
+    /// Residual (and Jacobian triplets) of the current active set at centres `x`, overlaps `delta`.
+    fn evaluate(&self, x: &[Vec3], delta: &[f64], adj: &[Vec<(usize, f64)>], jac: bool, shift: f64) -> Eval {
+        let n = x.len();
+        let nc = self.contacts.len();
+        let row_c = |c: usize| 3 * n + c;
+        let mut res = vec![0.0; 3 * n + nc];
+        let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        let mut push = |r: usize, c: usize, v: f64| {
+            if jac && v != 0.0 {
+                trip.push(Triplet::new(r, c, v));
+            }
+        };
+        let geo: Vec<Geo> = self.contacts.iter().map(|c| self.geometry(x, c.i, c.other)).collect();
+        let pf: Vec<(f64, f64)> =
+            self.contacts.iter().zip(delta).map(|(c, &d)| Self::force_of(c, d)).collect();
+
+        let mut k_sum = 0.0;
+        for (c, ct) in self.contacts.iter().enumerate() {
+            let (p, dp) = pf[c];
+            let g = &geo[c];
+            k_sum += dp;
+            // Force on i is −P e, on j +P e.
+            for a in 0..3 {
+                res[3 * ct.i + a] -= p * g.e[a];
+            }
+            res[row_c(c)] += g.gamma - delta[c];
+            for a in 0..3 {
+                push(3 * ct.i + a, row_c(c), -dp * g.e[a]);
+                // ∂γ/∂x_i = e_ic.
+                push(row_c(c), 3 * ct.i + a, g.e[a]);
+            }
+            push(row_c(c), row_c(c), -1.0);
+            if let Other::Particle(j) = ct.other {
+                for a in 0..3 {
+                    res[3 * j + a] += p * g.e[a];
+                    push(3 * j + a, row_c(c), dp * g.e[a]);
+                    push(row_c(c), 3 * j + a, -g.e[a]);
+                }
+                // ∂e/∂x_j = T/d, ∂e/∂x_i = −T/d with T = I − e eᵀ.
+                if jac {
+                    let t = (nalgebra::Matrix3::identity() - g.e * g.e.transpose()) * (p / g.d);
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            let v = t[(a, b)];
+                            push(3 * ct.i + a, 3 * j + b, -v);
+                            push(3 * ct.i + a, 3 * ct.i + b, v);
+                            push(3 * j + a, 3 * j + b, v);
+                            push(3 * j + a, 3 * ct.i + b, -v);
+                        }
+                    }
+                }
+            }
+        }
+
+        // Nonlocal terms: for particle s, the load at b moves the surface at a.
+        if !self.kernel.is_zero() {
+            for (s, list) in adj.iter().enumerate() {
+                for &(a, sa) in list {
+                    let ea = geo[a].e * sa;
+                    for &(b, sb) in list {
+                        if a == b {
+                            continue;
+                        }
+                        let eb = geo[b].e * sb;
+                        let mu = ea.dot(&eb);
+                        let (gk, dgk) = self.kernel.compliance(mu, self.e[s], self.nu[s], self.r[s]);
+                        let (pb, dpb) = pf[b];
+                        res[row_c(a)] -= gk * pb;
+                        push(row_c(a), row_c(b), -gk * dpb);
+                        if jac && dgk != 0.0 {
+                            let coef = -dgk * pb;
+                            // ∂μ/∂x: direction a moves with s and its partner, direction b likewise;
+                            // T_a e_b = e_b − μ e_a.
+                            if geo[a].d.is_finite() {
+                                let v = (eb - ea * mu) * (coef / geo[a].d);
+                                let oa = Self::other_particle(&self.contacts[a], sa).unwrap_or(s);
+                                for q in 0..3 {
+                                    push(row_c(a), 3 * s + q, -v[q]);
+                                    push(row_c(a), 3 * oa + q, v[q]);
+                                }
+                            }
+                            if geo[b].d.is_finite() {
+                                let v = (ea - eb * mu) * (coef / geo[b].d);
+                                let ob = Self::other_particle(&self.contacts[b], sb).unwrap_or(s);
+                                for q in 0..3 {
+                                    push(row_c(a), 3 * s + q, -v[q]);
+                                    push(row_c(a), 3 * ob + q, v[q]);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+
+        // Tether of the rigid-body modes (Jacobian only).
+        if jac {
+            let k_ref = if nc > 0 && k_sum > 0.0 { k_sum / nc as f64 } else { 1.0 };
+            let eps = (self.settings.regularisation + shift) * k_ref;
+            for i in 0..3 * n {
+                push(i, i, -eps);
+            }
+        }
+
+        let p_mean = {
+            let (sum, cnt) =
+                pf.iter().filter(|p| p.0 > 0.0).fold((0.0, 0usize), |(s, k), p| (s + p.0, k + 1));
+            // Forces below FORCE_FLOOR (scaled units) are round-off level: without a floor a lone
+            // vanishing contact would be judged relative to itself.
+            if cnt > 0 {
+                (sum / cnt as f64).max(FORCE_FLOOR)
+            } else {
+                1.0
+            }
+        };
+        let mut force_max = 0.0;
+        let mut worst = 0;
+        for i in 0..n {
+            let f = (res[3 * i].powi(2) + res[3 * i + 1].powi(2) + res[3 * i + 2].powi(2)).sqrt();
+            if f > force_max || f.is_nan() {
+                force_max = f;
+                worst = i;
+            }
+        }
+        let relation_rel = res[3 * n..].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        Eval { res, trip, force_rel: force_max / p_mean, relation_rel, worst }
+    }
+
+    fn merit(r: &[f64]) -> f64 {
+        r.iter().map(|v| v * v).sum::<f64>()
+    }
+
+    fn store(&mut self, x: Vec<Vec3>, delta: &[f64], iterations: usize) {
+        self.last_iterations = iterations;
+        self.x = x;
+        for (c, d) in self.contacts.iter_mut().zip(delta) {
+            c.delta = *d;
+        }
+    }
+
+    fn fail(&self, message: String, ev: &Eval) -> SolveError {
+        SolveError { message, residual: ev.force_rel, worst_particle: Some(self.ids[ev.worst]) }
+    }
+
+    /// Newton with backtracking line search for the current active set. Returns iterations.
+    fn newton(&mut self) -> Result<(usize, f64, f64), SolveError> {
+        let n = self.x.len();
+        let nc = self.contacts.len();
+        let dim = 3 * n + nc;
+        let adj = self.adjacency();
+        let mut x = self.x.clone();
+        let mut delta: Vec<f64> = self.contacts.iter().map(|c| c.delta).collect();
+        let tol = self.settings.tolerance;
+        let mut sigma = 0.0;
+        let mut ev = self.evaluate(&x, &delta, &adj, true, sigma);
+        let mut iters = 0;
+        let max_iters = self.settings.max_newton;
+        loop {
+            if !(ev.force_rel.is_finite() && ev.relation_rel.is_finite()) {
+                return Err(self.fail("non-finite residual".into(), &ev));
+            }
+            if ev.force_rel <= tol && ev.relation_rel <= tol {
+                break;
+            }
+            if iters >= max_iters {
+                let e = self.fail(format!("Newton did not converge in {iters} iterations"), &ev);
+                self.store(x, &delta, iters);
+                return Err(e);
+            }
+            iters += 1;
+            if std::env::var_os("MCDEM_NONLOCAL_TRACE").is_some() {
+                eprintln!(
+                    "  newton {iters}: contacts {nc} force {:.3e} relation {:.3e} nnz {} sigma {sigma:.1e}",
+                    ev.force_rel,
+                    ev.relation_rel,
+                    ev.trip.len()
+                );
+            }
+            let jm = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &ev.trip)
+                .map_err(|e| self.fail(format!("cannot assemble the Jacobian: {e:?}"), &ev))?;
+            let lu = jm.sp_lu().map_err(|e| self.fail(format!("sparse LU failed: {e:?}"), &ev))?;
+            let mut rhs = Mat::<f64>::from_fn(dim, 1, |i, _| -ev.res[i]);
+            lu.solve_in_place(rhs.as_mut());
+            let step: Vec<f64> = (0..dim).map(|i| rhs[(i, 0)]).collect();
+            if step.iter().any(|v| !v.is_finite()) {
+                return Err(self.fail("singular Jacobian (non-finite Newton step)".into(), &ev));
+            }
+            let m0 = Self::merit(&ev.res);
+            let mut alpha = 1.0;
+            // Armijo backtracking for the Newton step; with continuation on, a plain decrease
+            // within four halvings (the shifted step is not a descent direction of the merit in general).
+            let min_alpha = if sigma > 0.0 { 1.0 / 16.0 } else { 1.0 / 4096.0 };
+            let accepted = loop {
+                let xt: Vec<Vec3> = (0..n)
+                    .map(|i| x[i] + alpha * Vec3::new(step[3 * i], step[3 * i + 1], step[3 * i + 2]))
+                    .collect();
+                let dt: Vec<f64> = (0..nc).map(|c| delta[c] + alpha * step[3 * n + c]).collect();
+                let trial = self.evaluate(&xt, &dt, &adj, false, 0.0);
+                let m1 = Self::merit(&trial.res);
+                let armijo = if sigma > 0.0 { 1.0 } else { 1.0 - 1e-4 * alpha };
+                if m1.is_finite() && m1 < armijo * m0 {
+                    break Some((xt, dt, m1));
+                }
+                alpha *= 0.5;
+                if alpha < min_alpha {
+                    break None;
+                }
+            };
+            match accepted {
+                Some((xt, dt, m1)) => {
+                    x = xt;
+                    delta = dt;
+                    if sigma > 0.0 {
+                        sigma *= (m1 / m0).sqrt().max(0.01);
+                        if sigma < PTC_OFF {
+                            sigma = 0.0;
+                        }
+                    }
+                    ev = self.evaluate(&x, &delta, &adj, true, sigma);
+                }
+                None => {
+                    sigma = if sigma == 0.0 { PTC_START } else { sigma * 10.0 };
+                    if sigma > PTC_MAX {
+                        let e = self.fail(format!("no descent at Newton iteration {iters}"), &ev);
+                        self.store(x, &delta, iters);
+                        return Err(e);
+                    }
+                    ev = self.evaluate(&x, &delta, &adj, true, sigma);
+                }
+            }
+        }
+        self.store(x, &delta, iters);
+        Ok((iters, ev.force_rel, ev.relation_rel))
+    }
+
+    /// Sum over particle s's active contacts of G_s(·,k) P_k at direction `dir` (unit, from s).
+    fn approach(&self, s: usize, dir: &Vec3, adj: &[Vec<(usize, f64)>], geo: &[Geo]) -> f64 {
+        if self.kernel.is_zero() {
+            return 0.0;
+        }
+        adj[s]
+            .iter()
+            .map(|&(k, sk)| {
+                let mu = dir.dot(&(geo[k].e * sk));
+                let (g, _) = self.kernel.compliance(mu, self.e[s], self.nu[s], self.r[s]);
+                g * Self::force_of(&self.contacts[k], self.contacts[k].delta).0
+            })
+            .sum()
+    }
+
+    /// Active-set update after a Newton solve: releases contacts with δ < −tol and adds every
+    /// inactive pair or wall contact whose relation would give P ≥ 0 (within tol/2: contacts that
+    /// just touch are taken in, so a load can be carried by a contact that is closing right now;
+    /// the gap between the two thresholds prevents cycling). Returns whether anything changed.
+    fn update_active_set(&mut self) -> bool {
+        let tol = self.settings.tolerance;
+        let before = self.contacts.len();
+        self.contacts.retain(|c| c.delta >= -tol);
+        let mut changed = self.contacts.len() != before;
+        let adj = self.adjacency();
+        let geo: Vec<Geo> = self.contacts.iter().map(|c| self.geometry(&self.x, c.i, c.other)).collect();
+        let n = self.x.len();
+        let mut active_pairs: std::collections::HashSet<(usize, Other)> =
+            self.contacts.iter().map(|c| (c.i, c.other)).collect();
+        let mut new = Vec::new();
+        // Candidate search: the nonlocal growth of a radius is a small fraction of it, so pairs whose
+        // gap exceeds 20 % of the smaller radius cannot close.
+        for i in 0..n {
+            for w in 0..self.walls.len() {
+                let other = Other::Wall(w);
+                if active_pairs.contains(&(i, other)) {
+                    continue;
+                }
+                let g = self.geometry(&self.x, i, other);
+                if g.gamma < -0.2 * self.r[i] {
+                    continue;
+                }
+                let trial = g.gamma - self.approach(i, &g.e, &adj, &geo);
+                if trial > -0.5 * tol {
+                    new.push(Contact { i, other, delta: trial.max(0.0), k: self.stiffness(i, other) });
+                }
+            }
+            for j in i + 1..n {
+                let other = Other::Particle(j);
+                if active_pairs.contains(&(i, other)) {
+                    continue;
+                }
+                let v = self.x[j] - self.x[i];
+                let reach = self.r[i] + self.r[j];
+                let margin = 0.2 * self.r[i].min(self.r[j]);
+                if v.x.abs() > reach + margin || v.y.abs() > reach + margin || v.z.abs() > reach + margin {
+                    continue;
+                }
+                let g = self.geometry(&self.x, i, other);
+                if g.gamma < -margin || g.d.is_nan() || g.d <= 0.0 {
+                    continue;
+                }
+                let trial =
+                    g.gamma - self.approach(i, &g.e, &adj, &geo) - self.approach(j, &(-g.e), &adj, &geo);
+                if trial > -0.5 * tol {
+                    new.push(Contact { i, other, delta: trial.max(0.0), k: self.stiffness(i, other) });
+                }
+            }
+        }
+        for c in new {
+            active_pairs.insert((c.i, c.other));
+            self.contacts.push(c);
+            changed = true;
+        }
+        changed
+    }
+
+    /// Solves the equilibrium at the current wall positions, starting from the current state.
+    pub fn solve(&mut self) -> Result<StepStats, SolveError> {
+        let mut stats = StepStats::default();
+        for c in self.contacts.iter() {
+            if !c.k.is_finite() {
+                return Err(SolveError {
+                    message: "invalid contact stiffness (check the materials)".into(),
+                    residual: f64::NAN,
+                    worst_particle: Some(self.ids[c.i]),
+                });
+            }
+        }
+        // Contacts present in the initial geometry.
+        self.update_active_set();
+        loop {
+            if stats.active_set_rounds >= self.settings.max_active_rounds {
+                return Err(SolveError {
+                    message: format!("active set did not settle in {} rounds", stats.active_set_rounds),
+                    residual: stats.residual,
+                    worst_particle: None,
+                });
+            }
+            stats.active_set_rounds += 1;
+            // A failed Newton solve leaves its last iterate in place: if that iterate closes or
+            // opens contacts, the failure was the active set's, so update it and go on.
+            let (it, fr, rr) = match self.newton() {
+                Ok(v) => v,
+                Err(e) => {
+                    if self.update_active_set() {
+                        stats.newton_iterations += self.last_iterations;
+                        continue;
+                    }
+                    return Err(e);
+                }
+            };
+            stats.newton_iterations += it;
+            stats.residual = fr;
+            stats.relation_residual = rr;
+            if !self.update_active_set() {
+                break;
+            }
+        }
+        assert!(
+            stats.residual <= self.settings.tolerance,
+            "converged state violates the force-balance tolerance: {}",
+            stats.residual
+        );
+        Ok(stats)
+    }
+
+    /// Advances the loading parameter from `t0` to `t1`: `walls_at(t)` gives every wall's point [m].
+    /// A failing increment is restored and halved, at most `Settings::max_subdivisions` times deep.
+    pub fn advance(
+        &mut self,
+        walls_at: &dyn Fn(f64) -> Vec<Vec3>,
+        t0: f64,
+        t1: f64,
+    ) -> Result<StepStats, SolveError> {
+        self.advance_depth(walls_at, t0, t1, 0)
+    }
+
+    fn advance_depth(
+        &mut self,
+        walls_at: &dyn Fn(f64) -> Vec<Vec3>,
+        t0: f64,
+        t1: f64,
+        depth: u32,
+    ) -> Result<StepStats, SolveError> {
+        let saved_x = self.x.clone();
+        let saved_c = self.contacts.clone();
+        let saved_w: Vec<Vec3> = self.walls.iter().map(|w| w.point).collect();
+        for (w, p) in walls_at(t1).into_iter().enumerate() {
+            self.set_wall_point(w, p);
+        }
+        match self.solve() {
+            Ok(s) => Ok(s),
+            Err(e) => {
+                self.x = saved_x;
+                self.contacts = saved_c;
+                for (w, p) in saved_w.into_iter().enumerate() {
+                    self.walls[w].point = p;
+                }
+                if depth >= self.settings.max_subdivisions {
+                    return Err(SolveError {
+                        message: format!("{} after {depth} halvings of the load increment", e.message),
+                        ..e
+                    });
+                }
+                let tm = 0.5 * (t0 + t1);
+                let a = self.advance_depth(walls_at, t0, tm, depth + 1)?;
+                let b = self.advance_depth(walls_at, tm, t1, depth + 1)?;
+                Ok(StepStats {
+                    newton_iterations: a.newton_iterations + b.newton_iterations,
+                    active_set_rounds: a.active_set_rounds + b.active_set_rounds,
+                    subdivisions: a.subdivisions + b.subdivisions + 1,
+                    residual: b.residual,
+                    relation_residual: b.relation_residual,
+                })
+            }
+        }
+    }
+
+    /// Active contacts in SI units.
+    pub fn contacts(&self) -> Vec<ContactState> {
+        let f0 = self.force_unit();
+        self.contacts
+            .iter()
+            .map(|c| {
+                let g = self.geometry(&self.x, c.i, c.other);
+                ContactState {
+                    i: c.i,
+                    other: c.other,
+                    force: Self::force_of(c, c.delta).0 * f0,
+                    overlap: g.gamma * self.len,
+                    hertz_overlap: c.delta * self.len,
+                    direction: g.e,
+                }
+            })
+            .collect()
+    }
+
+    /// Force exerted by the particles on each wall [N].
+    pub fn wall_forces(&self) -> Vec<Vec3> {
+        let mut f = vec![Vec3::zeros(); self.walls.len()];
+        for c in self.contacts() {
+            if let Other::Wall(w) = c.other {
+                f[w] += c.force * c.direction;
+            }
+        }
+        f
+    }
+
+    /// Number of particle–particle and particle–wall contacts carrying a positive force.
+    pub fn contact_counts(&self) -> (usize, usize) {
+        let mut pp = 0;
+        let mut pw = 0;
+        for c in &self.contacts {
+            if c.delta > 0.0 {
+                match c.other {
+                    Other::Particle(_) => pp += 1,
+                    Other::Wall(_) => pw += 1,
+                }
+            }
+        }
+        (pp, pw)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nonlocal::kernel::KernelKind;
+
+    /// A small compressed cluster in a box with pair and wall contacts.
+    fn cluster(kind: KernelKind) -> Nonlocal {
+        let m = Material::hertz(1e4, 0.35).unwrap();
+        let wm = Material::hertz(1e7, 0.3).unwrap();
+        let pts = [
+            [0.95, 1.0, 0.9],
+            [2.75, 1.1, 1.0],
+            [1.9, 2.6, 1.05],
+            [1.85, 1.5, 2.55],
+            [0.9, 2.8, 2.7],
+            [2.9, 2.9, 2.8],
+        ];
+        let spheres: Vec<Sphere> = pts
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Sphere {
+                id: k as u64 + 1,
+                x: Vec3::from(*p),
+                radius: 1.0 + 0.05 * k as f64,
+                material: m,
+            })
+            .collect();
+        let walls = vec![
+            Wall { name: "a".into(), point: Vec3::zeros(), normal: Vec3::x() },
+            Wall { name: "b".into(), point: Vec3::zeros(), normal: Vec3::z() },
+            Wall { name: "c".into(), point: Vec3::new(3.8, 0.0, 0.0), normal: -Vec3::x() },
+        ];
+        let mut s = Nonlocal::new(&spheres, &walls, wm, Kernel::new(kind, 1.0).unwrap(), Settings::default())
+            .unwrap();
+        s.update_active_set();
+        for (k, c) in s.contacts.iter_mut().enumerate() {
+            c.delta = c.delta * 0.7 + 1e-3 * k as f64;
+        }
+        s
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let s = cluster(KernelKind::Boussinesq);
+        let nc = s.contacts.len();
+        assert!(nc >= 8, "cluster has only {nc} contacts");
+        let n = s.x.len();
+        let dim = 3 * n + nc;
+        let adj = s.adjacency();
+        let delta: Vec<f64> = s.contacts.iter().map(|c| c.delta).collect();
+        let ev = s.evaluate(&s.x, &delta, &adj, true, 0.0);
+        let mut dense = vec![vec![0.0; dim]; dim];
+        for t in &ev.trip {
+            dense[t.row][t.col] += t.val;
+        }
+        let h = 1e-7;
+        for col in 0..dim {
+            let (mut xp, mut xm) = (s.x.clone(), s.x.clone());
+            let (mut dp, mut dm) = (delta.clone(), delta.clone());
+            if col < 3 * n {
+                xp[col / 3][col % 3] += h;
+                xm[col / 3][col % 3] -= h;
+            } else {
+                dp[col - 3 * n] += h;
+                dm[col - 3 * n] -= h;
+            }
+            let rp = s.evaluate(&xp, &dp, &adj, false, 0.0).res;
+            let rm = s.evaluate(&xm, &dm, &adj, false, 0.0).res;
+            for row in 0..dim {
+                let fd = (rp[row] - rm[row]) / (2.0 * h);
+                let an = dense[row][col];
+                // The tether −ε·k_ref on the position diagonal is deliberately not in the residual.
+                let tether = if row == col && row < 3 * n { 1e-6 } else { 0.0 };
+                let tol = 1e-6 * (1.0 + fd.abs()) + tether;
+                if (an - fd).abs() > tol {
+                    panic!("J[{row}][{col}] = {an}, finite difference {fd}");
+                }
+            }
+        }
+    }
+}
