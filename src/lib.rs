@@ -8,4 +8,6 @@
 pub mod checks;
 pub mod contacts_cli;
 pub mod ffi;
+#[cfg(feature = "liggghts")]
+pub mod liggghts;
 pub mod physics;
