@@ -45,3 +45,144 @@ pub fn run_main() -> i32 {
     // SAFETY: argv holds argc valid NUL-terminated strings followed by a null pointer and outlives the call.
     unsafe { mcdem_liggghts_main(argc, argv.as_mut_ptr()) }
 }
+
+/// An error reported by [`Liggghts`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LiggghtsError(pub String);
+
+impl std::fmt::Display for LiggghtsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for LiggghtsError {}
+
+fn c_string(s: &str) -> Result<CString, LiggghtsError> {
+    CString::new(s).map_err(|_| LiggghtsError(format!("string contains a NUL byte: {s:?}")))
+}
+
+/// One LIGGGHTS instance in this process, opened through `library.h` with `mc_advanced` registered.
+///
+/// LIGGGHTS stops the whole process on a deck error (`ERROR: ...`, exit code 1), as the executable
+/// does; run untrusted decks through `mcdem-liggghts` in a child process instead.
+pub struct Liggghts {
+    handle: *mut c_void,
+}
+
+impl Liggghts {
+    /// Opens an instance with the given command-line arguments (e.g. `["-log", "none", "-screen", "none"]`).
+    /// MPI is initialised on first use by the library.
+    pub fn open(args: &[&str]) -> Result<Self, LiggghtsError> {
+        keep_abi_symbols();
+        let mut owned = vec![c_string("mcdem")?];
+        for a in args {
+            owned.push(c_string(a)?);
+        }
+        let mut argv: Vec<*mut c_char> = owned.iter().map(|a| a.as_ptr().cast_mut()).collect();
+        let argc = c_int::try_from(argv.len()).map_err(|_| LiggghtsError("too many arguments".into()))?;
+        let mut handle = std::ptr::null_mut();
+        // SAFETY: argv holds argc valid strings that outlive the call; handle receives the instance.
+        unsafe { sys::lammps_open_no_mpi(argc, argv.as_mut_ptr(), &mut handle) };
+        if handle.is_null() {
+            return Err(LiggghtsError("lammps_open_no_mpi returned no instance".into()));
+        }
+        // Registration of mc_advanced happens at load time in the shim; keep its entry point linked.
+        std::hint::black_box(mcdem_liggghts_main as *const c_void);
+        Ok(Self { handle })
+    }
+
+    /// Runs one deck command.
+    pub fn command(&mut self, cmd: &str) -> Result<(), LiggghtsError> {
+        let c = c_string(cmd)?;
+        // SAFETY: the handle is a live instance and c a valid string for the call.
+        unsafe { sys::lammps_command(self.handle, c.as_ptr().cast_mut()) };
+        Ok(())
+    }
+
+    /// Runs a whole deck file (`include` through [`Liggghts::command`] would only queue it).
+    pub fn file(&mut self, path: &std::path::Path) -> Result<(), LiggghtsError> {
+        let c = c_string(&path.to_string_lossy())?;
+        // SAFETY: the handle is a live instance and c a valid string for the call.
+        unsafe { sys::lammps_file(self.handle, c.as_ptr().cast_mut()) };
+        Ok(())
+    }
+
+    /// Runs several deck commands in order.
+    pub fn commands<'a>(&mut self, cmds: impl IntoIterator<Item = &'a str>) -> Result<(), LiggghtsError> {
+        for c in cmds {
+            self.command(c)?;
+        }
+        Ok(())
+    }
+
+    /// Total number of atoms.
+    pub fn natoms(&self) -> usize {
+        // SAFETY: the handle is a live instance.
+        let n = unsafe { sys::lammps_get_natoms(self.handle) };
+        usize::try_from(n).unwrap_or(0)
+    }
+
+    /// A per-atom 3-vector array (`x`, `v`, `f`, `omega`, ...) of the atoms owned by this process,
+    /// in storage order, copied out (one rank: all atoms).
+    pub fn atom_vec3(&self, name: &str) -> Result<Vec<[f64; 3]>, LiggghtsError> {
+        let n = self.nlocal()?;
+        let c = c_string(name)?;
+        // SAFETY: for per-atom 3-vectors the library returns a double** with nlocal rows of 3.
+        let p = unsafe { sys::lammps_extract_atom(self.handle, c.as_ptr().cast_mut()) } as *const *const f64;
+        if p.is_null() {
+            return Err(LiggghtsError(format!("no per-atom array named {name}")));
+        }
+        Ok((0..n)
+            .map(|i| {
+                // SAFETY: i < nlocal and every row holds three doubles.
+                let row = unsafe { *p.add(i) };
+                unsafe { [*row, *row.add(1), *row.add(2)] }
+            })
+            .collect())
+    }
+
+    /// A per-atom scalar array of doubles (`radius`, `rmass`, ...) of the owned atoms, copied out.
+    pub fn atom_scalar(&self, name: &str) -> Result<Vec<f64>, LiggghtsError> {
+        let n = self.nlocal()?;
+        let c = c_string(name)?;
+        // SAFETY: for per-atom double scalars the library returns a double* with nlocal entries.
+        let p = unsafe { sys::lammps_extract_atom(self.handle, c.as_ptr().cast_mut()) } as *const f64;
+        if p.is_null() {
+            return Err(LiggghtsError(format!("no per-atom array named {name}")));
+        }
+        // SAFETY: p points to nlocal doubles.
+        Ok(unsafe { std::slice::from_raw_parts(p, n) }.to_vec())
+    }
+
+    /// Atom ids (`tag`) of the owned atoms, in storage order (the order of [`Liggghts::atom_vec3`]).
+    pub fn atom_ids(&self) -> Result<Vec<i64>, LiggghtsError> {
+        let n = self.nlocal()?;
+        let c = c_string("id")?;
+        // SAFETY: "id" is the per-atom int array `tag` with nlocal entries.
+        let p = unsafe { sys::lammps_extract_atom(self.handle, c.as_ptr().cast_mut()) } as *const c_int;
+        if p.is_null() {
+            return Err(LiggghtsError("no per-atom ids".into()));
+        }
+        // SAFETY: p points to nlocal ints.
+        Ok(unsafe { std::slice::from_raw_parts(p, n) }.iter().map(|&t| i64::from(t)).collect())
+    }
+
+    fn nlocal(&self) -> Result<usize, LiggghtsError> {
+        let c = c_string("nlocal")?;
+        // SAFETY: "nlocal" is a global int of every instance.
+        let p = unsafe { sys::lammps_extract_global(self.handle, c.as_ptr().cast_mut()) } as *const c_int;
+        if p.is_null() {
+            return Err(LiggghtsError("nlocal not available".into()));
+        }
+        // SAFETY: non-null pointer to the instance's nlocal.
+        Ok(usize::try_from(unsafe { *p }).unwrap_or(0))
+    }
+}
+
+impl Drop for Liggghts {
+    fn drop(&mut self) {
+        // SAFETY: the handle was returned by lammps_open_no_mpi and is closed once.
+        unsafe { sys::lammps_close(self.handle) };
+    }
+}
