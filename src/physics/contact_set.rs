@@ -141,6 +141,82 @@ impl ContactSetKernel {
     }
 }
 
+/// Contact counts up to which the kernel keeps its per-contact scratch on the stack.
+const STACK_CONTACTS: usize = 48;
+
+/// Sums the Eq. 2 terms at every contact, applying the cap; returns the number of contacts
+/// switched back to Hertz.
+///
+/// Each unordered pair (c, k) is visited once: the chord, its length and direction serve both
+/// terms (k on c and c on k; the reverse direction is the exact negation, so both terms are the
+/// same doubles as when computed separately). Contact c receives its terms in increasing k,
+/// exactly the order of a per-contact loop, so Δ_c does not depend on this traversal.
+/// `hertz_fallback` doubles as the "tripped" mark while summing.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn accumulate(
+    contacts: &[ContactLoad],
+    normal: impl Fn(usize) -> Option<Vec3>,
+    loaded: impl Fn(usize) -> bool,
+    pref: f64,
+    nu: f64,
+    cap: Option<Cap>,
+    delta_max: Option<f64>,
+    delta: &mut [f64],
+    hertz_fallback: &mut [bool],
+) -> Result<usize, KernelError> {
+    let n = contacts.len();
+    let trips = |term: f64| match (cap, delta_max) {
+        (Some(cap), Some(dm)) => cap.trips(term, dm),
+        _ => false,
+    };
+    for ci in 0..n {
+        let Some(n_c) = normal(ci) else { continue };
+        let c = &contacts[ci];
+        let c_loaded = loaded(ci);
+        for ki in ci + 1..n {
+            let k_loaded = loaded(ki);
+            if !(c_loaded || k_loaded) {
+                continue;
+            }
+            let Some(n_k) = normal(ki) else { continue };
+            let k = &contacts[ki];
+            let chord = c.point - k.point;
+            let d = chord.norm();
+            if d < MIN_CHORD {
+                continue;
+            }
+            let u = chord / d;
+            if k_loaded && !hertz_fallback[ci] {
+                let term = pref * k.force / d * bracket(&n_k, &n_c, &u, nu);
+                if trips(term) {
+                    hertz_fallback[ci] = true;
+                } else {
+                    delta[ci] += term;
+                }
+            }
+            if c_loaded && !hertz_fallback[ki] {
+                let term = pref * c.force / d * bracket(&n_c, &n_k, &-u, nu);
+                if trips(term) {
+                    hertz_fallback[ki] = true;
+                } else {
+                    delta[ki] += term;
+                }
+            }
+        }
+    }
+    let mut fallbacks = 0;
+    for ci in 0..n {
+        if hertz_fallback[ci] {
+            delta[ci] = 0.0;
+            fallbacks += 1;
+        } else if !delta[ci].is_finite() {
+            return Err(KernelError::NonFiniteResult { contact: ci });
+        }
+    }
+    Ok(fallbacks)
+}
+
 /// Radius change Δ_c (m) of the particle at every contact c, Eq. 2 summed over k ≠ c, with the
 /// Eq. 3 cap when `p.cap` is set. `delta[c]` and `hertz_fallback[c]` are written for every contact
 /// in input order; a contact that the cap switched to Hertz gets Δ_c = 0 and `hertz_fallback = true`.
@@ -182,45 +258,31 @@ pub fn radius_changes(
     let nu = p.poisson_ratio;
     let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
     let delta_max = p.cap.map(|cap| cap.delta_max(p.radius));
-    let mut fallbacks = 0;
-    for (ci, c) in contacts.iter().enumerate() {
-        let lc = c.point.norm();
-        if lc <= 0.0 {
-            continue;
+    // Inward normals are computed once per contact, on the stack for the usual contact counts
+    // (the same expression as when recomputed per term, so results do not depend on the path).
+    let is_loaded = |i: usize| contacts[i].force > threshold;
+    let fallbacks = if n <= STACK_CONTACTS {
+        let mut normals = [Vec3::zeros(); STACK_CONTACTS];
+        let mut has_normal = [false; STACK_CONTACTS];
+        for (i, c) in contacts.iter().enumerate() {
+            let l = c.point.norm();
+            if l > 0.0 {
+                normals[i] = -c.point / l;
+                has_normal[i] = true;
+            }
         }
-        let n_c = -c.point / lc;
-        let mut sum = 0.0;
-        let mut tripped = false;
-        for (ki, k) in contacts.iter().enumerate() {
-            if ki == ci || k.force <= threshold {
-                continue;
+        let normal = |i: usize| if has_normal[i] { Some(normals[i]) } else { None };
+        accumulate(contacts, normal, is_loaded, pref, nu, p.cap, delta_max, delta, hertz_fallback)?
+    } else {
+        let normal = |i: usize| {
+            let l = contacts[i].point.norm();
+            if l > 0.0 {
+                Some(-contacts[i].point / l)
+            } else {
+                None
             }
-            let chord = c.point - k.point;
-            let d = chord.norm();
-            let lk = k.point.norm();
-            if d < MIN_CHORD || lk <= 0.0 {
-                continue;
-            }
-            let u = chord / d;
-            let n_k = -k.point / lk;
-            let term = pref * k.force / d * bracket(&n_k, &n_c, &u, nu);
-            if let (Some(cap), Some(dm)) = (p.cap, delta_max) {
-                if cap.trips(term, dm) {
-                    tripped = true;
-                    break;
-                }
-            }
-            sum += term;
-        }
-        if tripped {
-            hertz_fallback[ci] = true;
-            fallbacks += 1;
-        } else {
-            if !sum.is_finite() {
-                return Err(KernelError::NonFiniteResult { contact: ci });
-            }
-            delta[ci] = sum;
-        }
-    }
+        };
+        accumulate(contacts, normal, is_loaded, pref, nu, p.cap, delta_max, delta, hertz_fallback)?
+    };
     Ok(KernelSummary { loaded, fallbacks })
 }
