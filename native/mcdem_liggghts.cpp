@@ -191,9 +191,6 @@ public:
         }
         if (force->newton_pair)
             error->all(FLERR, "model mc_advanced needs `newton off` (per-contact data are stored on both partners)");
-        if (comm->nprocs > 1)
-            error->all(FLERR, "model mc_advanced runs on one MPI rank only in this version: "
-                              "start it without mpirun or with -np 1");
         neighbor->register_contact_dist_factor(kContactDistanceFactor);
         // Walls must see the same radius changes as pairs: give every granular wall its store now,
         // during the pair's init, so that the fixes created here are initialised with the others.
@@ -473,7 +470,8 @@ private:
             for (size_t c = 0; c < n; c++) rows_[c][3] = delta_[c];
         }
 
-        // 3. Ghost copies see their owners' radius changes.
+        // 3. Ghost copies see their owners' radius changes (with several MPI ranks a pair across a
+        //    sub-domain boundary reads its partner's row from the ghost).
         for (size_t s = 0; s < sources_.size(); s++) sources_[s].store->do_forward_comm();
     }
 
