@@ -7,6 +7,8 @@
 //! - bad decks stop with one `ERROR:` line that names the cause;
 //! - the hydrogel packing: piston force of mc_advanced (cap never tripping) vs stock multicontact.
 //!
+//! (The `library.h` bindings are tested in `liggghts_library.rs`, a process of their own.)
+//!
 //! The dump reader is a small parser of our own (frames of named numeric columns): it needs no
 //! dataframe library, whose compile time on the CI machine would exceed the rest of the build.
 #![cfg(feature = "liggghts")]
@@ -193,8 +195,13 @@ fn expect_error(deck_vars: (&str, Vec<(&str, &str)>), dir: &Path, needles: &[&st
     vars.push(("steps", "10"));
     let (out, log) = run(dir, deck, &vars);
     assert!(!out.status.success(), "{deck} {vars:?} should fail");
-    let errors: Vec<&str> = log.lines().filter(|l| l.starts_with("ERROR")).collect();
-    assert_eq!(errors.len(), 1, "expected one ERROR line, got {errors:?}");
+    // OpenMPI's abort path can lose either the log file's buffer or stdout: take the ERROR
+    // lines from whichever kept them.
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let error_lines =
+        |t: &str| t.lines().filter(|l| l.starts_with("ERROR")).map(str::to_owned).collect::<Vec<_>>();
+    let errors = if log.contains("ERROR") { error_lines(&log) } else { error_lines(&stdout) };
+    assert_eq!(errors.len(), 1, "{deck} {vars:?}: expected one ERROR line, got {errors:?}; stdout {stdout}");
     for n in needles {
         assert!(errors[0].contains(n), "{:?} does not name {n:?}", errors[0]);
     }
@@ -307,33 +314,4 @@ fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
         "hydrogel, one fast stroke: piston F_z NRMSE mc_advanced (MPR 1e9) vs stock multicontact = {e:.3e}"
     );
     assert!(e <= 0.02, "NRMSE {e}");
-}
-
-#[test]
-fn library_interface_opens_an_instance_and_reads_atoms() {
-    // Everything in one test: MPI is initialised once per process.
-    let tmp = TempDir::new().unwrap();
-    let log = tmp.path().join("lib.log");
-    let mut l = mcdem::liggghts::Liggghts::open(&["-log", log.to_str().unwrap(), "-screen", "none"]).unwrap();
-    let deck = decks().join("two_particles.in");
-    let dump = tmp.path().join("lib.dump");
-    l.commands([
-        format!("variable dir index {}", decks().display()).as_str(),
-        format!("variable dump index {}", dump.display()).as_str(),
-        "variable steps index 200",
-    ])
-    .unwrap();
-    l.file(&deck).unwrap();
-    assert_eq!(l.natoms(), 2);
-    let ids = l.atom_ids().unwrap();
-    let x = l.atom_vec3("x").unwrap();
-    let r = l.atom_scalar("radius").unwrap();
-    let last = read_dump(&dump).pop().expect("a frame");
-    for (k, id) in ids.iter().enumerate() {
-        let row = last.rows.iter().find(|row| row[0] as i64 == *id).expect("atom in dump");
-        for c in 0..3 {
-            assert!((row[2 + c] - x[k][c]).abs() <= 1e-9 * x[k][c].abs().max(1e-3), "atom {id} x[{c}]");
-        }
-        assert_eq!(r[k], 0.001);
-    }
 }
