@@ -10,6 +10,8 @@ pub mod contacts_cli;
 pub mod deck;
 pub mod engine;
 pub mod ffi;
+#[cfg(feature = "liggghts")]
+pub mod liggghts;
 pub mod nonlocal;
 pub mod physics;
 pub mod validate;

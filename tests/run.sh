@@ -22,3 +22,6 @@ fi
 cargo fmt --check
 cargo clippy --release --all-targets -- -D warnings
 cargo test --release
+# The LIGGGHTS plugin (feature `liggghts`): the C++ shim, `mcdem-liggghts` and its end-to-end tests.
+cargo clippy --release --all-targets --features liggghts -- -D warnings
+cargo test --release --features liggghts

@@ -9,7 +9,9 @@ use super::material::PairCoeffs;
 use super::Vec3;
 
 /// √(5/6), the constant of Eqs. C.2 and C.7.
-const SQRT_FIVE_SIXTHS: f64 = 0.912_870_929_175_276_8;
+/// The correctly rounded double of √(5/6), the value LIGGGHTS uses: the 16-digit literal
+/// 0.9128709291752768 is one ulp lower and breaks bit-parity with LIGGGHTS `hertz` whenever damping acts.
+const SQRT_FIVE_SIXTHS: f64 = 0.912_870_929_175_276_9;
 
 /// Output of the normal sub-model for one contact.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -122,4 +124,12 @@ pub fn tangential_history(
         ft -= normal.gamma_t * vtr;
     }
     ft
+}
+
+#[cfg(test)]
+mod constant_tests {
+    #[test]
+    fn sqrt_five_sixths_is_the_correctly_rounded_double() {
+        assert_eq!(super::SQRT_FIVE_SIXTHS, (5.0f64 / 6.0).sqrt());
+    }
 }

@@ -1,0 +1,541 @@
+/*
+ * LIGGGHTS plumbing for `pair_style gran model mc_advanced` (advanced multi-contact model,
+ * Ghods et al. 2022). Every formula lives in the Rust core behind native/mcdem.h; this file only
+ * moves data between LIGGGHTS's data structures and that C ABI:
+ *
+ *  - NormalModel<MC_ADVANCED>: the normal force of one contact, computed by mcdem_hertz_normal
+ *    on the overlap of the multi-contact-modified radii, plus the per-contact record (contact
+ *    surface and |F_n| of this step) that the next step's radius changes need.
+ *  - The multi-contact bookkeeping, run by the pair's model at the start of each force pass:
+ *    gathers every contact of each owned particle (pairs and walls), calls mcdem_radius_changes
+ *    (Eq. 2 with the Eq. 3 cap) and stores the radius change per contact where LIGGGHTS's pair
+ *    and wall loops read it when `store multicontact data` is switched on. That storage, and the
+ *    detection of contacts with the grown radii, is the library's own machinery for its standard
+ *    multi-contact model, so both models share the same contact detection and communication.
+ *  - Registration of the model name and of the optimised template instances on the pair and
+ *    wall factories, and the entry point of the `mcdem-liggghts` executable.
+ */
+
+#include <mpi.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "atom.h"
+#include "comm.h"
+#include "error.h"
+#include "force.h"
+#include "input.h"
+#include "lammps.h"
+#include "modify.h"
+#include "neigh_list.h"
+#include "neighbor.h"
+#include "properties.h"
+#include "update.h"
+// Must precede pair_gran_base.h: the installed fix_insert_stream_predefined.h does not include its base.
+#include "fix_insert_stream.h"
+#include "contact_models.h"
+#include "fix_contact_property_atom.h"
+#include "fix_contact_property_atom_wall.h"
+#include "fix_mesh_surface.h"
+#include "fix_multicontact_halfspace.h"
+#include "fix_property_global.h"
+#include "fix_wall_gran.h"
+#include "fix_wall_gran_base.h"
+#include "granular_pair_style.h"
+#include "granular_wall.h"
+#include "pair_gran.h"
+#include "pair_gran_base.h"
+#include "pair_gran_proxy.h"
+
+#include "mcdem.h"
+
+#ifndef MCDEM_MC_ADVANCED_ID
+#error "MCDEM_MC_ADVANCED_ID must be defined by the build (an id unused by the installed LIGGGHTS)"
+#endif
+
+namespace LIGGGHTS {
+namespace ContactModels {
+static const int MC_ADVANCED = MCDEM_MC_ADVANCED_ID;
+}
+}  // namespace LIGGGHTS
+
+namespace {
+
+using namespace LAMMPS_NS;
+using namespace LIGGGHTS;
+using namespace LIGGGHTS::ContactModels;
+
+// --- access to Settings' private table ------------------------------------------------------
+// `mprTest abs|signed` is a keyword with named options, but Settings only offers on/off, yes/no
+// and double keywords publicly. The standard explicit-instantiation idiom gives a pointer to the
+// private table so that our own Setting subclass can be registered next to the library's ones.
+template <typename Tag, typename Tag::type Member>
+struct PrivateAccess {
+    friend typename Tag::type private_member(Tag) { return Member; }
+};
+struct SettingsTableTag {
+    typedef std::map<std::string, Setting *> Settings::*type;
+    friend type private_member(SettingsTableTag);
+};
+template struct PrivateAccess<SettingsTableTag, &Settings::settings>;
+
+class MprTestSetting : public Setting {
+public:
+    explicit MprTestSetting(bool *signed_test) : Setting("mprTest", 1), target_(signed_test) {}
+    int parseArguments(char **args) {
+        if (name != args[0]) return 0;
+        const char *v = args[1];
+        if (v && std::strcmp(v, "abs") == 0) {
+            *target_ = false;
+            return 2;
+        }
+        if (v && std::strcmp(v, "signed") == 0) {
+            *target_ = true;
+            return 2;
+        }
+        error_message = std::string("model mc_advanced: mprTest must be 'abs' or 'signed', got '") +
+                        (v ? v : "") + "'";
+        return -1;
+    }
+    void print_value(FILE *out) { std::fprintf(out, "%s", *target_ ? "signed" : "abs"); }
+
+private:
+    bool *target_;
+};
+
+std::string last_mcdem_error() {
+    char buf[512];
+    mcdem_last_error(buf, sizeof(buf));
+    return std::string(buf);
+}
+
+// Offset of the per-contact record in a contact history. LIGGGHTS's HistoryData scales the offset
+// of wall histories by sizeof(double), so the record must sit first (offset 0) in wall histories.
+const char *const kRecordName = "mcdem_mc_record";
+
+// How far (as a multiple of the radius sum) a pair is still tracked as "close": a contact that
+// only radius growth creates must be known before it touches. Users can raise it with
+// `neigh_modify contact_distance_factor`.
+const double kContactDistanceFactor = 1.2;
+
+}  // namespace
+
+namespace LIGGGHTS {
+namespace ContactModels {
+
+// Everything the multi-contact bookkeeping touches, gathered once per run.
+struct McSource {
+    HistoryData history;
+    FixContactPropertyAtom *store;
+    bool wall;
+    McSource(const HistoryData &h, FixContactPropertyAtom *s, bool w) : history(h), store(s), wall(w) {}
+};
+
+template <>
+class NormalModel<MC_ADVANCED> : public NormalModelBase {
+public:
+    NormalModel(LAMMPS *lmp, IContactHistorySetup *hsetup, ContactModelBase *c)
+        : NormalModelBase(lmp, hsetup, c),
+          cmb_(c),
+          record_offset_(-1),
+          tangential_damping_(true),
+          limit_force_(false),
+          signed_test_(false),
+          ntypes_(0),
+          sources_ready_(false) {
+        // Per-contact record read by the next step's radius changes (the layout LIGGGHTS's
+        // HistoryData expects): pairs r_i', r_j', |F_n|; walls the contact point relative to the
+        // centre and |F_n|.
+        if (c->is_wall()) {
+            record_offset_ = hsetup->add_history_value("mcdem_point_x", "0");
+            hsetup->add_history_value("mcdem_point_y", "0");
+            hsetup->add_history_value("mcdem_point_z", "0");
+            hsetup->add_history_value("mcdem_fn", "0");
+        } else {
+            record_offset_ = hsetup->add_history_value("mcdem_radius_ij", "0");
+            hsetup->add_history_value("mcdem_radius_ji", "0");
+            hsetup->add_history_value("mcdem_fn", "0");
+        }
+        c->add_history_offset(kRecordName, record_offset_);
+    }
+
+    void registerSettings(Settings &settings) {
+        settings.registerOnOff("tangential_damping", tangential_damping_, true);
+        settings.registerOnOff("limitForce", limit_force_);
+        std::map<std::string, Setting *> &table = settings.*private_member(SettingsTableTag());
+        if (table.find("mprTest") == table.end()) table["mprTest"] = new MprTestSetting(&signed_test_);
+    }
+
+    void postSettings(IContactHistorySetup *, ContactModelBase *) {
+        if (cmb_->is_wall()) return;
+        // Switches on the library's per-contact radius storage, read by the pair and wall loops
+        // for detection, overlap and effective radius; it must be set before the pair's init.
+        PairGran *pg = dynamic_cast<PairGran *>(force->pair);
+        if (!pg) error->all(FLERR, "model mc_advanced: the pair style is not a granular pair style");
+        pg->do_store_multicontact_data();
+    }
+
+    void connectToProperties(PropertyRegistry &) {
+        read_materials();
+        if (cmb_->is_wall()) {
+            PairGran *pg = static_cast<PairGran *>(force->pair_match("gran", 0));
+            if (!pg || !pg->contact_match("normal", "mc_advanced"))
+                error->all(FLERR, "fix wall/gran with model mc_advanced needs `pair_style gran model mc_advanced`: "
+                                  "the multi-contact radius changes are computed by the pair style");
+            return;
+        }
+        if (force->newton_pair)
+            error->all(FLERR, "model mc_advanced needs `newton off` (per-contact data are stored on both partners)");
+        neighbor->register_contact_dist_factor(kContactDistanceFactor);
+        // Walls must see the same radius changes as pairs: give every granular wall its store now,
+        // during the pair's init, so that the fixes created here are initialised with the others.
+        const int nwalls = modify->n_fixes_style("wall/gran");
+        for (int w = 0; w < nwalls; w++) {
+            FixWallGran *fwg = static_cast<FixWallGran *>(modify->find_fix_style("wall/gran", w));
+            if (!fwg->contact_match("normal", "mc_advanced")) {
+                char msg[256];
+                std::snprintf(msg, sizeof(msg),
+                              "fix %s: walls must use `model mc_advanced` when the pair style does "
+                              "(a wall contact deforms the particle at its other contacts)",
+                              fwg->id);
+                error->all(FLERR, msg);
+            }
+            if (fwg->is_mesh_wall()) {
+                for (int m = 0; m < fwg->n_meshes(); m++) fwg->mesh_list()[m]->createMulticontactData();
+            } else {
+                fwg->createMulticontactData();
+            }
+        }
+        sources_ready_ = false;
+    }
+
+    double stressStrainExponent() { return 1.5; }
+
+    void beginPass(SurfacesIntersectData &sidata, ForceData &, ForceData &) {
+        // The pair pass starts each force evaluation: the records of the previous step are
+        // complete (walls included) and nothing has used radii yet, so the radius changes of this
+        // step are computed here. Passes that only collect data (computeflag 0) reuse them.
+        if (cmb_->is_wall() || !sidata.computeflag) return;
+        update_radius_changes();
+    }
+
+    void endPass(SurfacesIntersectData &, ForceData &, ForceData &) {}
+
+    void surfacesIntersect(SurfacesIntersectData &sidata, ForceData &i_forces, ForceData &j_forces) {
+        if (sidata.contact_flags) *sidata.contact_flags |= CONTACT_NORMAL_MODEL;
+        const int it = sidata.itype, jt = sidata.jtype;
+        const double radi = sidata.radi, radj = sidata.radj;
+        const double reff = sidata.is_wall ? radi : radi * radj / (radi + radj);
+        // Radii shrunk by the multi-contact correction can leave a geometric touch with no
+        // effective overlap (or no positive effective radius): that contact carries no force.
+        const double deltan = reff > 0.0 ? sidata.deltan : 0.0;
+        mcdem_normal_force nf;
+        if (mcdem_hertz_normal(&coeffs_[it][jt], deltan, reff, sidata.meff, sidata.vn, &nf) != MCDEM_OK) {
+            char msg[700];
+            std::snprintf(msg, sizeof(msg), "model mc_advanced: particle %d, step " BIGINT_FORMAT ": %s",
+                          atom->tag[sidata.i], update->ntimestep, last_mcdem_error().c_str());
+            error->one(FLERR, msg);
+        }
+        double fn = nf.force;
+        if (limit_force_ && fn < 0.0) fn = 0.0;
+        sidata.Fn = fn;
+        sidata.kn = nf.kn / force->nktv2p;
+        sidata.kt = nf.kt / force->nktv2p;
+        sidata.gamman = nf.gamma_n;
+        sidata.gammat = tangential_damping_ ? nf.gamma_t : 0.0;
+        const double applied = sidata.is_wall ? fn * sidata.area_ratio : fn;
+        for (int k = 0; k < 3; k++) {
+            i_forces.delta_F[k] += applied * sidata.en[k];
+            if (!sidata.is_wall) j_forces.delta_F[k] -= applied * sidata.en[k];
+        }
+        if (sidata.computeflag && sidata.shearupdate && sidata.contact_history) {
+            double *rec = &sidata.contact_history[record_offset_];
+            if (sidata.is_wall) {
+                for (int k = 0; k < 3; k++) rec[k] = -sidata.delta[k];
+                rec[3] = std::fabs(applied);
+            } else {
+                rec[0] = radi;
+                rec[1] = radj;
+                rec[2] = std::fabs(applied);
+            }
+        }
+    }
+
+    void surfacesClose(SurfacesCloseData &scdata, ForceData &, ForceData &) {
+        if (scdata.contact_flags) *scdata.contact_flags |= CONTACT_NORMAL_MODEL;
+        if (!(scdata.computeflag && scdata.shearupdate && scdata.contact_history)) return;
+        // A close, untouching pair is still recorded (with zero force) so that the radius change
+        // it receives from the particle's other contacts can bring it into contact.
+        double *rec = &scdata.contact_history[record_offset_];
+        if (scdata.is_wall) {
+            const double len = std::sqrt(scdata.delta[0] * scdata.delta[0] + scdata.delta[1] * scdata.delta[1] +
+                                         scdata.delta[2] * scdata.delta[2]);
+            const double s = len > 1e-15 ? -scdata.radi / len : 0.0;
+            for (int k = 0; k < 3; k++) rec[k] = scdata.delta[k] * s;
+            rec[3] = 0.0;
+        } else {
+            rec[0] = scdata.radi;
+            rec[1] = scdata.radj;
+            rec[2] = 0.0;
+        }
+    }
+
+private:
+    FixPropertyGlobal *find_property(const char *name, const char *kind, int len, const char *usage) {
+        Fix *f = modify->find_fix_property(name, "property/global", kind, len, 0, "model mc_advanced", false);
+        if (!f) {
+            char msg[512];
+            std::snprintf(msg, sizeof(msg),
+                          "model mc_advanced needs property %s: add `fix ID all property/global %s %s` %s",
+                          name, name, kind, usage);
+            error->all(FLERR, msg);
+        }
+        return static_cast<FixPropertyGlobal *>(f);
+    }
+
+    // Reads the material per atom type, validates it through the core and builds the pair
+    // coefficient table (one entry per type pair, walls have their own atom type).
+    void read_materials() {
+        const int n = atom->get_properties()->max_type();
+        char usage[64];
+        std::snprintf(usage, sizeof(usage), "(%d values, one per atom type)", n);
+        char usage_pair[64];
+        std::snprintf(usage_pair, sizeof(usage_pair), "%d followed by %d values", n, n * n);
+        const double *E = find_property("youngsModulus", "peratomtype", n, usage)->get_values();
+        const double *nu = find_property("poissonsRatio", "peratomtype", n, usage)->get_values();
+        const double *gamma = find_property("geometricPrefactor", "peratomtype", n, usage)->get_values();
+        const double *mpr = find_property("maxPenetrationRatio", "peratomtype", n, usage)->get_values();
+        FixPropertyGlobal *rest = find_property("coefficientRestitution", "peratomtypepair", n, usage_pair);
+        Fix *fric_fix = modify->find_fix_property("coefficientFriction", "property/global", "peratomtypepair", n, n,
+                                                  "model mc_advanced", false);
+        FixPropertyGlobal *fric = static_cast<FixPropertyGlobal *>(fric_fix);
+
+        ntypes_ = n;
+        params_.assign(n + 1, mcdem_mc_params());
+        coeffs_.assign(n + 1, std::vector<mcdem_pair_coeffs>(n + 1));
+        for (int t = 1; t <= n; t++) {
+            mcdem_mc_params p;
+            p.radius = 1.0;  // placeholder: the real radius is per particle, set at each call
+            p.youngs_modulus = E[t - 1];
+            p.poisson_ratio = nu[t - 1];
+            p.gamma = gamma[t - 1];
+            p.mpr = mpr[t - 1];
+            p.cap = signed_test_ ? MCDEM_CAP_SIGNED : MCDEM_CAP_ABS;
+            if (mcdem_validate_mc_params(&p) != MCDEM_OK) fail_property(t, last_mcdem_error());
+            params_[t] = p;
+        }
+        for (int a = 1; a <= n; a++) {
+            for (int b = 1; b <= n; b++) {
+                const double e = rest->compute_array(a - 1, b - 1);
+                const double mu = fric ? fric->compute_array(a - 1, b - 1) : 0.0;
+                if (mcdem_pair_coeffs_new(E[a - 1], nu[a - 1], E[b - 1], nu[b - 1], e, mu, &coeffs_[a][b]) !=
+                    MCDEM_OK) {
+                    char msg[700];
+                    std::snprintf(msg, sizeof(msg),
+                                  "model mc_advanced, atom types %d and %d (coefficientRestitution / "
+                                  "coefficientFriction): %s",
+                                  a, b, last_mcdem_error().c_str());
+                    error->all(FLERR, msg);
+                }
+            }
+        }
+    }
+
+    void fail_property(int type, const std::string &core_msg) {
+        // Name the LIGGGHTS property a user has to change, not the core's field.
+        const char *prop = "a material property";
+        if (core_msg.find("poisson") != std::string::npos) prop = "poissonsRatio";
+        else if (core_msg.find("young") != std::string::npos) prop = "youngsModulus";
+        else if (core_msg.find("gamma") != std::string::npos) prop = "geometricPrefactor";
+        else if (core_msg.find("mpr") != std::string::npos) prop = "maxPenetrationRatio";
+        char msg[700];
+        std::snprintf(msg, sizeof(msg), "model mc_advanced: invalid %s for atom type %d (%s)", prop, type,
+                      core_msg.c_str());
+        error->all(FLERR, msg);
+    }
+
+    void collect_sources() {
+        sources_.clear();
+        PairGranProxy *pg = static_cast<PairGranProxy *>(force->pair_match("gran", 0));
+        FixContactPropertyAtom *pair_store =
+            static_cast<FixContactPropertyAtom *>(modify->find_fix_id("multicontactData_"));
+        if (!pair_store) error->all(FLERR, "model mc_advanced: the pair style's per-contact store was not created");
+        sources_.push_back(McSource(HistoryData('p', (void *)pg, record_offset_), pair_store, false));
+
+        const int nwalls = modify->n_fixes_style("wall/gran");
+        for (int w = 0; w < nwalls; w++) {
+            FixWallGran *fwg = static_cast<FixWallGran *>(modify->find_fix_style("wall/gran", w));
+            if (fwg->get_history_offset(kRecordName) != 0) {
+                char msg[256];
+                std::snprintf(msg, sizeof(msg),
+                              "fix %s: model mc_advanced expects its contact record first in the wall history", fwg->id);
+                error->all(FLERR, msg);
+            }
+            char fixid[256];
+            if (fwg->is_mesh_wall()) {
+                for (int m = 0; m < fwg->n_meshes(); m++) {
+                    FixMeshSurface *mesh = fwg->mesh_list()[m];
+                    std::snprintf(fixid, sizeof(fixid), "tracker_%s", mesh->id);
+                    Fix *tracker = modify->find_fix_id(fixid);
+                    FixContactPropertyAtom *store = mesh->meshMulticontactData();
+                    if (!tracker || !store) {
+                        std::snprintf(fixid, sizeof(fixid), "fix %s: mesh %s has no contact tracker or store",
+                                      fwg->id, mesh->id);
+                        error->all(FLERR, fixid);
+                    }
+                    sources_.push_back(McSource(HistoryData('m', (void *)tracker, 0), store, true));
+                }
+            } else {
+                std::snprintf(fixid, sizeof(fixid), "history_%s", fwg->id);
+                Fix *hist = modify->find_fix_id(fixid);
+                std::snprintf(fixid, sizeof(fixid), "multicontactData_%s", fwg->id);
+                FixContactPropertyAtom *store = static_cast<FixContactPropertyAtom *>(modify->find_fix_id(fixid));
+                if (!hist || !store) {
+                    std::snprintf(fixid, sizeof(fixid), "fix %s: primitive wall has no contact history or store",
+                                  fwg->id);
+                    error->all(FLERR, fixid);
+                }
+                sources_.push_back(McSource(HistoryData('w', (void *)hist, 0), store, true));
+            }
+        }
+        sources_ready_ = true;
+    }
+
+    void update_radius_changes() {
+        if (!sources_ready_) collect_sources();
+        for (size_t s = 0; s < sources_.size(); s++) {
+            if (sources_[s].wall) static_cast<FixContactPropertyAtomWall *>(sources_[s].store)->clear();
+            else sources_[s].store->clear();
+        }
+        const int nlocal = atom->nlocal;
+        double **x = atom->x;
+        const int *tag = atom->tag;
+        const int *type = atom->type;
+        const double *radius = atom->radius;
+
+        // 1. Contact points and previous-step forces of every recorded contact, stored on both
+        //    partners of a pair (the library's store keeps one row per partner: point + force).
+        for (int i = 0; i < nlocal; i++) {
+            const mcdem_mc_params &p = params_[type[i]];
+            const double f_eps = p.youngs_modulus * radius[i] * radius[i] * 1e-14;
+            for (size_t s = 0; s < sources_.size(); s++) {
+                HistoryData &h = sources_[s].history;
+                const int n = h.get_npartners(i);
+                for (int jj = 0; jj < n; jj++) {
+                    double *rec = h.get_data_ptr(i, jj);
+                    // A neighbour never close enough to be recorded has no contact surface.
+                    if (rec[0] == 0.0 && rec[1] == 0.0 && (sources_[s].wall ? rec[2] == 0.0 : true)) continue;
+                    double pij[4], pji[4];
+                    h.compute_surfPos(i, jj, x, rec, pij, pji, f_eps);
+                    pij[3] = pji[3] = h.get_fn(rec);
+                    h.save_contact_property_atom(i, jj, tag, pij, pji, sources_[s].store);
+                }
+            }
+        }
+
+        // 2. Radius change per contact from the core; particles with fewer than two contacts have
+        //    no neighbour term and are not sent.
+        for (int i = 0; i < nlocal; i++) {
+            rows_.clear();
+            for (size_t s = 0; s < sources_.size(); s++) {
+                FixContactPropertyAtom *st = sources_[s].store;
+                const int n = st->get_npartners(i);
+                for (int c = 0; c < n; c++) rows_.push_back(st->contacthistory(i, c));
+            }
+            const size_t n = rows_.size();
+            if (n < 2) {
+                for (size_t c = 0; c < n; c++) rows_[c][3] = 0.0;
+                continue;
+            }
+            loads_.resize(n);
+            delta_.resize(n);
+            fallback_.resize(n);
+            for (size_t c = 0; c < n; c++) {
+                for (int k = 0; k < 3; k++) loads_[c].point[k] = rows_[c][k];
+                loads_[c].force = rows_[c][3];
+            }
+            mcdem_mc_params p = params_[type[i]];
+            p.radius = radius[i];
+            if (mcdem_radius_changes(&p, &loads_[0], n, &delta_[0], &fallback_[0], NULL) != MCDEM_OK) {
+                char msg[700];
+                std::snprintf(msg, sizeof(msg), "model mc_advanced: particle %d, step " BIGINT_FORMAT ": %s", tag[i],
+                              update->ntimestep, last_mcdem_error().c_str());
+                error->one(FLERR, msg);
+            }
+            for (size_t c = 0; c < n; c++) rows_[c][3] = delta_[c];
+        }
+
+        // 3. Ghost copies see their owners' radius changes (with several MPI ranks a pair across a
+        //    sub-domain boundary reads its partner's row from the ghost).
+        for (size_t s = 0; s < sources_.size(); s++) sources_[s].store->do_forward_comm();
+    }
+
+    ContactModelBase *cmb_;
+    int record_offset_;
+    bool tangential_damping_;
+    bool limit_force_;
+    bool signed_test_;
+    int ntypes_;
+    std::vector<mcdem_mc_params> params_;
+    std::vector<std::vector<mcdem_pair_coeffs> > coeffs_;
+    bool sources_ready_;
+    std::vector<McSource> sources_;
+    std::vector<double *> rows_;
+    std::vector<mcdem_contact_load> loads_;
+    std::vector<double> delta_;
+    std::vector<uint8_t> fallback_;
+};
+
+}  // namespace ContactModels
+}  // namespace LIGGGHTS
+
+namespace {
+
+template <typename T>
+PairStyles::IGranularPairStyle *make_pair(LAMMPS *lmp, PairGran *parent, const int64_t hash) {
+    return new T(lmp, parent, hash);
+}
+
+template <typename T>
+Walls::IGranularWall *make_wall(LAMMPS *lmp, FixWallGran *parent, const int64_t hash) {
+    return new T(lmp, parent, hash);
+}
+
+// One optimised instance per combination a deck may select; an unregistered combination would
+// fall back to the library's runtime dispatch, which does not know mc_advanced.
+template <int TANGENTIAL>
+void register_combination() {
+    typedef GranStyle<MC_ADVANCED, TANGENTIAL, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT> Style;
+    typedef ContactModel<Style> Model;
+    PairStyles::Factory::instance().addStyle("gran", Style::HASHCODE, &make_pair<PairStyles::Granular<Model> >);
+    Walls::Factory::instance().addStyle("gran", Style::HASHCODE, &make_wall<Walls::Granular<Model> >);
+}
+
+struct Registrar {
+    Registrar() {
+        ContactModels::Factory::instance().addNormalModel("mc_advanced", MC_ADVANCED);
+        register_combination<TANGENTIAL_NO_HISTORY>();
+        register_combination<TANGENTIAL_HISTORY>();
+    }
+};
+
+Registrar registrar;
+
+}  // namespace
+
+// Entry point of `mcdem-liggghts`: the stock LIGGGHTS command line (-in, -var, -log, -echo, ...)
+// with mc_advanced registered. Referencing this function from the executable also keeps the
+// registrar's object file in the link.
+extern "C" int mcdem_liggghts_main(int argc, char **argv) {
+    MPI_Init(&argc, &argv);
+    LAMMPS_NS::LAMMPS *lmp = new LAMMPS_NS::LAMMPS(argc, argv, MPI_COMM_WORLD);
+    lmp->input->file();
+    delete lmp;
+    MPI_Finalize();
+    return 0;
+}

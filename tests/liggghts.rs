@@ -1,0 +1,317 @@
+//! End-to-end tests of the LIGGGHTS plugin: the decks in `liggghts_inputs/` run by
+//! `mcdem-liggghts` in temporary directories, their `dump custom` and `fix ave/time` output parsed
+//! and compared between contact laws.
+//!
+//! - MPR = 0 reproduces the stock `hertz` (pairs, primitive and mesh walls) to print precision;
+//! - MPR huge reproduces the stock `surface multicontact` + `fix multicontact/halfspace` (same γ);
+//! - bad decks stop with one `ERROR:` line that names the cause;
+//! - the hydrogel packing: piston force of mc_advanced (cap never tripping) vs stock multicontact.
+//!
+//! (The `library.h` bindings are tested in `liggghts_library.rs`, a process of their own.)
+//!
+//! The dump reader is a small parser of our own (frames of named numeric columns): it needs no
+//! dataframe library, whose compile time on the CI machine would exceed the rest of the build.
+#![cfg(feature = "liggghts")]
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use assert_cmd::Command;
+use tempfile::TempDir;
+
+fn decks() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs")
+}
+
+/// Runs `deck` in `dir` with `-var` pairs; the log goes to `run.log` (OpenMPI may lose stdout on
+/// an error exit, the log file keeps the `ERROR:` line). Returns the output and the log text.
+fn run(dir: &Path, deck: &str, vars: &[(&str, &str)]) -> (Output, String) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_mcdem-liggghts"));
+    cmd.current_dir(dir).arg("-in").arg(decks().join(deck)).arg("-log").arg("run.log");
+    cmd.arg("-var").arg("dir").arg(decks());
+    for (k, v) in vars {
+        cmd.arg("-var").arg(k).arg(v);
+    }
+    let out = cmd.output().expect("start mcdem-liggghts");
+    let log = std::fs::read_to_string(dir.join("run.log")).unwrap_or_default();
+    (out, log)
+}
+
+fn run_ok(dir: &Path, deck: &str, vars: &[(&str, &str)]) -> String {
+    let (out, log) = run(dir, deck, vars);
+    assert!(
+        out.status.success(),
+        "{deck} {vars:?} failed ({}):\n{}\n{}",
+        out.status,
+        log.lines().rev().take(15).collect::<Vec<_>>().join("\n"),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    log
+}
+
+/// One frame of a `dump custom` file.
+#[derive(Debug, Clone, PartialEq)]
+struct Frame {
+    step: u64,
+    columns: Vec<String>,
+    rows: Vec<Vec<f64>>,
+}
+
+/// Reads a LIGGGHTS `dump custom` text file: `ITEM: TIMESTEP`, `ITEM: NUMBER OF ATOMS`,
+/// `ITEM: BOX BOUNDS`, `ITEM: ATOMS <columns>` and one line per atom (runs of spaces, trailing space).
+fn read_dump(path: &Path) -> Vec<Frame> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
+    let mut frames = Vec::new();
+    let mut lines = text.lines();
+    while let Some(line) = lines.next() {
+        if line.starts_with("ITEM: TIMESTEP") {
+            let step = lines.next().and_then(|l| l.trim().parse().ok()).expect("timestep value");
+            frames.push(Frame { step, columns: Vec::new(), rows: Vec::new() });
+        } else if let Some(cols) = line.strip_prefix("ITEM: ATOMS") {
+            let f = frames.last_mut().expect("ATOMS before TIMESTEP");
+            f.columns = cols.split_whitespace().map(str::to_owned).collect();
+        } else if line.starts_with("ITEM:") {
+            continue;
+        } else if let Some(f) = frames.last_mut() {
+            if f.columns.is_empty() {
+                continue; // atom count or box bounds
+            }
+            let row: Vec<f64> = line.split_whitespace().map(|x| x.parse().expect("number")).collect();
+            assert_eq!(row.len(), f.columns.len(), "{}: bad row {line:?}", path.display());
+            f.rows.push(row);
+        }
+    }
+    frames
+}
+
+/// Reads a `fix ave/time ... file` output: comment lines start with `#`, then numeric rows.
+fn read_ave_time(path: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| l.split_whitespace().map(|x| x.parse().expect("number")).collect())
+        .collect()
+}
+
+/// Largest difference between two dumps, each value relative to the largest magnitude of its
+/// column in that frame (so that round-off noise in a quantity that is zero by symmetry does not
+/// count as a relative difference of order one). Panics if the frames do not line up.
+fn max_dump_difference(a: &[Frame], b: &[Frame]) -> f64 {
+    assert_eq!(a.len(), b.len(), "different frame counts");
+    let mut worst: f64 = 0.0;
+    for (fa, fb) in a.iter().zip(b) {
+        assert_eq!((fa.step, &fa.columns, fa.rows.len()), (fb.step, &fb.columns, fb.rows.len()));
+        for c in 0..fa.columns.len() {
+            let scale = fa.rows.iter().chain(&fb.rows).map(|r| r[c].abs()).fold(0.0, f64::max);
+            for (ra, rb) in fa.rows.iter().zip(&fb.rows) {
+                let d = (ra[c] - rb[c]).abs();
+                if d > 0.0 {
+                    worst = worst.max(d / scale);
+                }
+            }
+        }
+    }
+    worst
+}
+
+/// Print precision of the decks' dumps: `%.10g`.
+const PRINT_PRECISION: f64 = 1e-9;
+
+fn compare_laws(deck: &str, mc: &[(&str, &str)], stock: &[(&str, &str)]) -> f64 {
+    let tmp = TempDir::new().unwrap();
+    let mut a = mc.to_vec();
+    a.extend([("law", "0"), ("dump", "mc.dump"), ("out", "mc.txt")]);
+    let mut b = stock.to_vec();
+    b.extend([("dump", "stock.dump"), ("out", "stock.txt")]);
+    run_ok(tmp.path(), deck, &a);
+    run_ok(tmp.path(), deck, &b);
+    let (da, db) = (read_dump(&tmp.path().join("mc.dump")), read_dump(&tmp.path().join("stock.dump")));
+    assert!(da.len() > 10, "too few frames in the dump");
+    max_dump_difference(&da, &db)
+}
+
+#[test]
+fn mpr_zero_is_stock_hertz_two_particles_and_plate() {
+    // Same contact distance factor for both runs: it sets the neighbour lists and so the order in
+    // which forces are summed.
+    let d =
+        compare_laws("two_particles.in", &[("mpr", "0"), ("cdf", "1.2")], &[("law", "1"), ("cdf", "1.2")]);
+    assert!(d <= PRINT_PRECISION, "max relative difference {d:e}");
+}
+
+#[test]
+fn mpr_zero_is_stock_hertz_with_primitive_and_mesh_walls() {
+    for deck in ["single_particle_plates.in", "bcc_box.in"] {
+        let d = compare_laws(deck, &[("mpr", "0"), ("cdf", "1.2")], &[("law", "1"), ("cdf", "1.2")]);
+        eprintln!("{deck}: mc_advanced MPR = 0 vs hertz, max relative difference {d:e}");
+        assert!(d <= PRINT_PRECISION, "{deck}: max relative difference {d:e}");
+    }
+}
+
+#[test]
+fn huge_mpr_is_stock_multicontact_same_gamma() {
+    // Stock multicontact registers a contact distance factor of 2; use it for both. The two codes
+    // evaluate Eq. 2 with different (equivalent) expressions, so a particle with several loaded
+    // contacts sees one-ulp differences that the symmetric die configurations amplify over
+    // 3000 steps; the tolerance allows that growth and nothing more.
+    for (deck, tol) in
+        [("two_particles.in", PRINT_PRECISION), ("single_particle_plates.in", 1e-3), ("bcc_box.in", 1e-3)]
+    {
+        let d = compare_laws(deck, &[("mpr", "1e9"), ("cdf", "2.0")], &[("law", "2"), ("cdf", "2.0")]);
+        eprintln!("{deck}: mc_advanced MPR = 1e9 vs stock multicontact, max relative difference {d:e}");
+        assert!(d <= tol, "{deck}: max relative difference {d:e}");
+    }
+}
+
+#[test]
+fn cap_moves_the_response_between_hertz_and_standard_mc() {
+    // Single particle in the die at Δ/r = 0.3: the neighbour terms reach ~0.01 r, so MPR = 0.01
+    // trips the cap for part of the loading; the plate force must differ from both limits and
+    // stay finite (no abort), which shows the cap is wired in.
+    let tmp = TempDir::new().unwrap();
+    let deck = "single_particle_plates.in";
+    run_ok(tmp.path(), deck, &[("law", "0"), ("mpr", "0.01"), ("out", "adv.txt"), ("dump", "adv.dump")]);
+    run_ok(tmp.path(), deck, &[("law", "1"), ("out", "hz.txt"), ("dump", "hz.dump")]);
+    run_ok(tmp.path(), deck, &[("law", "0"), ("mpr", "1e9"), ("out", "mc.txt"), ("dump", "mc.dump")]);
+    let last = |f: &str| read_ave_time(&tmp.path().join(f)).last().expect("rows")[2];
+    let (adv, hz, mc) = (last("adv.txt"), last("hz.txt"), last("mc.txt"));
+    assert!(adv.is_finite() && hz > 0.0 && mc > 1.2 * hz, "adv {adv}, hertz {hz}, standard MC {mc}");
+    assert!(
+        (adv - mc).abs() > 1e-3 * mc && (adv - hz).abs() > 1e-3 * hz,
+        "adv {adv}, hertz {hz}, standard MC {mc}"
+    );
+}
+
+/// A copy of the two-particle deck edited by `edit`, written into `dir`.
+fn edited_deck(dir: &Path, edit: impl Fn(&str) -> String) -> String {
+    let text = std::fs::read_to_string(decks().join("two_particles.in")).unwrap();
+    let name = "edited.in";
+    std::fs::write(dir.join(name), edit(&text)).unwrap();
+    dir.join(name).to_string_lossy().into_owned()
+}
+
+fn expect_error(deck_vars: (&str, Vec<(&str, &str)>), dir: &Path, needles: &[&str]) {
+    let (deck, mut vars) = deck_vars;
+    vars.push(("steps", "10"));
+    let (out, log) = run(dir, deck, &vars);
+    assert!(!out.status.success(), "{deck} {vars:?} should fail");
+    // OpenMPI's abort path can lose either the log file's buffer or stdout: take the ERROR
+    // lines from whichever kept them.
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let error_lines =
+        |t: &str| t.lines().filter(|l| l.starts_with("ERROR")).map(str::to_owned).collect::<Vec<_>>();
+    let errors = if log.contains("ERROR") { error_lines(&log) } else { error_lines(&stdout) };
+    assert_eq!(errors.len(), 1, "{deck} {vars:?}: expected one ERROR line, got {errors:?}; stdout {stdout}");
+    for n in needles {
+        assert!(errors[0].contains(n), "{:?} does not name {n:?}", errors[0]);
+    }
+}
+
+#[test]
+fn bad_decks_stop_with_one_error_line_naming_the_cause() {
+    let tmp = TempDir::new().unwrap();
+    let d = tmp.path();
+    let two = "two_particles.in";
+    // Negative values go through deck edits: the command line reads "-0.5" as a new switch.
+    let deck = edited_deck(d, |t| {
+        t.replace(
+            "geometricPrefactor peratomtype ${gamma} ${gamma}",
+            "geometricPrefactor peratomtype -0.5 0.81",
+        )
+    });
+    expect_error((&deck, vec![]), d, &["geometricPrefactor", "-0.5"]);
+    let deck = edited_deck(d, |t| {
+        t.replace("maxPenetrationRatio peratomtype ${mpr} ${mpr}", "maxPenetrationRatio peratomtype 0.1 -1")
+    });
+    expect_error((&deck, vec![]), d, &["maxPenetrationRatio", "-1", "type 2"]);
+    expect_error((two, vec![("mprtest", "sometimes")]), d, &["mprTest", "sometimes"]);
+
+    let deck = edited_deck(d, |t| {
+        t.replace("poissonsRatio peratomtype 0.5 0.5", "poissonsRatio peratomtype 0.6 0.5")
+    });
+    expect_error((&deck, vec![]), d, &["poissonsRatio", "0.6"]);
+    let deck = edited_deck(d, |t| {
+        t.replace("poissonsRatio peratomtype 0.5 0.5", "poissonsRatio peratomtype -0.1 0.5")
+    });
+    expect_error((&deck, vec![]), d, &["poissonsRatio", "-0.1"]);
+    for prop in ["geometricPrefactor", "maxPenetrationRatio", "youngsModulus", "coefficientRestitution"] {
+        let deck = edited_deck(d, |t| t.lines().filter(|l| !l.contains(prop)).collect::<Vec<_>>().join("\n"));
+        expect_error((&deck, vec![]), d, &[prop]);
+    }
+}
+
+#[test]
+fn mpr_test_signed_runs() {
+    let tmp = TempDir::new().unwrap();
+    run_ok(
+        tmp.path(),
+        "bcc_box.in",
+        &[("mprtest", "signed"), ("steps", "500"), ("out", "s.txt"), ("dump", "s.dump")],
+    );
+    let rows = read_ave_time(&tmp.path().join("s.txt"));
+    assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
+}
+
+#[test]
+fn two_mpi_ranks_give_the_one_rank_result() {
+    // The per-contact radius changes of particles owned by the other rank reach the pair loop
+    // through the ghost exchange. The single particle in the die crosses the sub-domain boundary.
+    let tmp = TempDir::new().unwrap();
+    let deck = decks().join("single_particle_plates.in");
+    for np in ["1", "2"] {
+        let out = std::process::Command::new("mpirun")
+            .current_dir(tmp.path())
+            .args(["--allow-run-as-root", "--oversubscribe", "-np", np])
+            .arg(env!("CARGO_BIN_EXE_mcdem-liggghts"))
+            .arg("-in")
+            .arg(&deck)
+            .args([
+                "-log",
+                &format!("np{np}.log"),
+                "-var",
+                "mpr",
+                "1e9",
+                "-var",
+                "dump",
+                &format!("np{np}.dump"),
+            ])
+            .args(["-var", "out", &format!("np{np}.txt"), "-var", "dir"])
+            .arg(decks())
+            .output()
+            .expect("mpirun (openmpi-bin)");
+        assert!(out.status.success(), "np {np}: {}", String::from_utf8_lossy(&out.stdout));
+    }
+    let (a, b) = (read_dump(&tmp.path().join("np1.dump")), read_dump(&tmp.path().join("np2.dump")));
+    let d = max_dump_difference(&a, &b);
+    assert!(d <= PRINT_PRECISION, "one vs two ranks: max relative difference {d:e}");
+}
+
+/// Root-mean-square difference of `a` from the reference `b`, divided by the mean of |b|.
+fn nrmse(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let n = a.len() as f64;
+    let rmse = (a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / n).sqrt();
+    rmse / (b.iter().map(|y| y.abs()).sum::<f64>() / n)
+}
+
+#[test]
+fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
+    // Shortened for test time: one compression stroke in 3000 steps (ten times the example's
+    // piston speed), the same for both laws; γ = 1.125 as in the Debian example.
+    let tmp = TempDir::new().unwrap();
+    let common = [("stroke", "3000"), ("strokes", "1"), ("every", "100"), ("cdf", "2.0")];
+    let mut mc = common.to_vec();
+    mc.extend([("law", "0"), ("mpr", "1e9"), ("out", "mc.txt")]);
+    let mut st = common.to_vec();
+    st.extend([("law", "2"), ("out", "stock.txt")]);
+    run_ok(tmp.path(), "hydrogel.in", &mc);
+    run_ok(tmp.path(), "hydrogel.in", &st);
+    let fz = |f: &str| read_ave_time(&tmp.path().join(f)).iter().map(|r| r[3]).collect::<Vec<f64>>();
+    let (a, b) = (fz("mc.txt"), fz("stock.txt"));
+    assert_eq!(a.len(), 30);
+    let e = nrmse(&a, &b);
+    eprintln!(
+        "hydrogel, one fast stroke: piston F_z NRMSE mc_advanced (MPR 1e9) vs stock multicontact = {e:.3e}"
+    );
+    assert!(e <= 0.02, "NRMSE {e}");
+}
