@@ -33,6 +33,7 @@ enum Command {
         /// No progress bar even on a terminal
         #[arg(long)]
         no_progress: bool,
+    },
     /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path
     Nonlocal {
         /// Scene file (JSON, see docs/nonlocal.md)
