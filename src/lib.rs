@@ -13,5 +13,6 @@ pub mod ffi;
 #[cfg(feature = "liggghts")]
 pub mod liggghts;
 pub mod nonlocal;
+pub mod outputs;
 pub mod physics;
 pub mod validate;

@@ -68,22 +68,16 @@ fn copy_dir(from: &Path, to: &Path) {
 /// step → (columns, id → values) of a LIGGGHTS text dump.
 type Frames = BTreeMap<u64, (Vec<String>, BTreeMap<i64, Vec<f64>>)>;
 
+/// Frames keyed by step, rows keyed by the `id` column (the engines may order atoms differently).
 fn read_dump(path: &Path) -> Frames {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut out = Frames::new();
-    for block in text.split("ITEM: TIMESTEP\n").skip(1) {
-        let lines: Vec<&str> = block.lines().collect();
-        let step: u64 = lines[0].trim().parse().unwrap();
-        let n: usize = lines[2].trim().parse().unwrap();
-        let cols: Vec<String> = lines[7].split_whitespace().skip(2).map(String::from).collect();
-        let mut rows = BTreeMap::new();
-        for l in &lines[8..8 + n] {
-            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
-            rows.insert(v[0] as i64, v[1..].to_vec());
-        }
-        out.insert(step, (cols, rows));
-    }
-    out
+    mcdem::outputs::read_dump(path)
+        .unwrap()
+        .into_iter()
+        .map(|f| {
+            let rows = f.rows.iter().map(|r| (r[0] as i64, r[1..].to_vec())).collect();
+            (f.step, (f.columns, rows))
+        })
+        .collect()
 }
 
 /// Largest difference per column, relative to the largest magnitude of that column over the run
@@ -175,13 +169,10 @@ fn particle_between_plates_standard_mc_matches_liggghts_within_a_run() {
 }
 
 fn read_ave(text: &str) -> BTreeMap<u64, Vec<f64>> {
-    text.lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| {
-            let mut w = l.split_whitespace();
-            let s: u64 = w.next().unwrap().parse().unwrap();
-            (s, w.map(|x| x.parse().unwrap()).collect())
-        })
+    mcdem::outputs::parse_ave_time(text, "ave/time")
+        .unwrap()
+        .into_iter()
+        .map(|r| (r[0] as u64, r[1..].to_vec()))
         .collect()
 }
 
@@ -193,10 +184,9 @@ fn nrmse_per_stroke(ours: &str, theirs: &str, stroke_steps: u64) -> Vec<f64> {
         .map(|k| {
             let sel: Vec<u64> =
                 b.keys().copied().filter(|s| *s > k * stroke_steps && *s <= (k + 1) * stroke_steps).collect();
-            let n = sel.len() as f64;
-            let mse = sel.iter().map(|s| (a[s][2] - b[s][2]).powi(2)).sum::<f64>() / n;
-            let mean = sel.iter().map(|s| b[s][2].abs()).sum::<f64>() / n;
-            mse.sqrt() / mean
+            let ours: Vec<f64> = sel.iter().map(|s| a[s][2]).collect();
+            let theirs: Vec<f64> = sel.iter().map(|s| b[s][2]).collect();
+            mcdem::outputs::nrmse(&ours, &theirs)
         })
         .collect()
 }

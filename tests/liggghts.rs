@@ -49,48 +49,14 @@ fn run_ok(dir: &Path, deck: &str, vars: &[(&str, &str)]) -> String {
     log
 }
 
-/// One frame of a `dump custom` file.
-#[derive(Debug, Clone, PartialEq)]
-struct Frame {
-    step: u64,
-    columns: Vec<String>,
-    rows: Vec<Vec<f64>>,
-}
+use mcdem::outputs::Frame;
 
-/// Reads a LIGGGHTS `dump custom` text file: `ITEM: TIMESTEP`, `ITEM: NUMBER OF ATOMS`,
-/// `ITEM: BOX BOUNDS`, `ITEM: ATOMS <columns>` and one line per atom (runs of spaces, trailing space).
 fn read_dump(path: &Path) -> Vec<Frame> {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
-    let mut frames = Vec::new();
-    let mut lines = text.lines();
-    while let Some(line) = lines.next() {
-        if line.starts_with("ITEM: TIMESTEP") {
-            let step = lines.next().and_then(|l| l.trim().parse().ok()).expect("timestep value");
-            frames.push(Frame { step, columns: Vec::new(), rows: Vec::new() });
-        } else if let Some(cols) = line.strip_prefix("ITEM: ATOMS") {
-            let f = frames.last_mut().expect("ATOMS before TIMESTEP");
-            f.columns = cols.split_whitespace().map(str::to_owned).collect();
-        } else if line.starts_with("ITEM:") {
-            continue;
-        } else if let Some(f) = frames.last_mut() {
-            if f.columns.is_empty() {
-                continue; // atom count or box bounds
-            }
-            let row: Vec<f64> = line.split_whitespace().map(|x| x.parse().expect("number")).collect();
-            assert_eq!(row.len(), f.columns.len(), "{}: bad row {line:?}", path.display());
-            f.rows.push(row);
-        }
-    }
-    frames
+    mcdem::outputs::read_dump(path).unwrap()
 }
 
-/// Reads a `fix ave/time ... file` output: comment lines start with `#`, then numeric rows.
 fn read_ave_time(path: &Path) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
-    text.lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| l.split_whitespace().map(|x| x.parse().expect("number")).collect())
-        .collect()
+    mcdem::outputs::read_ave_time(path).unwrap()
 }
 
 /// Largest difference between two dumps, each value relative to the largest magnitude of its
@@ -286,13 +252,7 @@ fn two_mpi_ranks_give_the_one_rank_result() {
     assert!(d <= PRINT_PRECISION, "one vs two ranks: max relative difference {d:e}");
 }
 
-/// Root-mean-square difference of `a` from the reference `b`, divided by the mean of |b|.
-fn nrmse(a: &[f64], b: &[f64]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let n = a.len() as f64;
-    let rmse = (a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / n).sqrt();
-    rmse / (b.iter().map(|y| y.abs()).sum::<f64>() / n)
-}
+use mcdem::outputs::nrmse;
 
 #[test]
 fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {

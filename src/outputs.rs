@@ -1,0 +1,145 @@
+//! Readers of LIGGGHTS text outputs (`dump custom`, `dump local`, `fix ave/time ... file`), shared
+//! by the validation harness and the tests of both engines so that every comparison reads files the
+//! same way. LIGGGHTS writes runs of spaces, a trailing space and many frames per file; malformed
+//! input is an error naming the file and line, never a silently short table.
+
+use std::path::Path;
+
+/// One frame of a `dump custom` (`ITEM: ATOMS ...`) or `dump local` (`ITEM: ENTRIES ...`) file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    pub step: u64,
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl Frame {
+    /// Index of a column by name.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.columns.iter().position(|c| c == name)
+    }
+}
+
+fn read(path: &Path) -> Result<String, String> {
+    std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))
+}
+
+/// Parses the text of a dump file (see [`read_dump`]); `name` is used in error messages.
+pub fn parse_dump(text: &str, name: &str) -> Result<Vec<Frame>, String> {
+    let mut frames: Vec<Frame> = Vec::new();
+    let mut lines = text.lines().enumerate();
+    let mut expect_rows = 0usize;
+    while let Some((no, line)) = lines.next() {
+        let at = |what: &str| format!("{name}:{}: {what}", no + 1);
+        if line.starts_with("ITEM: TIMESTEP") {
+            if expect_rows > 0 {
+                return Err(at(&format!("frame ended {expect_rows} rows early")));
+            }
+            let (n2, v) = lines.next().ok_or_else(|| at("missing timestep value"))?;
+            let step = v.trim().parse().map_err(|_| format!("{name}:{}: bad timestep '{v}'", n2 + 1))?;
+            frames.push(Frame { step, columns: Vec::new(), rows: Vec::new() });
+        } else if line.starts_with("ITEM: NUMBER OF") {
+            let (n2, v) = lines.next().ok_or_else(|| at("missing count"))?;
+            expect_rows = v.trim().parse().map_err(|_| format!("{name}:{}: bad count '{v}'", n2 + 1))?;
+        } else if let Some(cols) =
+            line.strip_prefix("ITEM: ATOMS").or_else(|| line.strip_prefix("ITEM: ENTRIES"))
+        {
+            let f = frames.last_mut().ok_or_else(|| at("columns before the first TIMESTEP"))?;
+            f.columns = cols.split_whitespace().map(str::to_owned).collect();
+            for _ in 0..expect_rows {
+                let (n2, l) = lines.next().ok_or_else(|| at("file ends inside a frame"))?;
+                let row = l
+                    .split_whitespace()
+                    .map(|x| x.parse::<f64>())
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|_| format!("{name}:{}: not a number in '{l}'", n2 + 1))?;
+                if row.len() != f.columns.len() {
+                    return Err(format!(
+                        "{name}:{}: {} values for {} columns",
+                        n2 + 1,
+                        row.len(),
+                        f.columns.len()
+                    ));
+                }
+                f.rows.push(row);
+            }
+            expect_rows = 0;
+        } else if line.starts_with("ITEM: BOX BOUNDS") {
+            for _ in 0..3 {
+                lines.next().ok_or_else(|| at("file ends inside BOX BOUNDS"))?;
+            }
+        } else if !line.trim().is_empty() {
+            return Err(at(&format!("unexpected line '{line}'")));
+        }
+    }
+    Ok(frames)
+}
+
+/// Reads a LIGGGHTS `dump custom` or `dump local` text file into frames.
+pub fn read_dump(path: &Path) -> Result<Vec<Frame>, String> {
+    parse_dump(&read(path)?, &path.display().to_string())
+}
+
+/// Parses `fix ave/time ... file` text: `#` comment lines, then one numeric row per output step
+/// (first column the time step).
+pub fn parse_ave_time(text: &str, name: &str) -> Result<Vec<Vec<f64>>, String> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|(no, l)| {
+            l.split_whitespace()
+                .map(|x| x.parse::<f64>())
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|_| format!("{name}:{}: not a number in '{l}'", no + 1))
+        })
+        .collect()
+}
+
+/// Reads a `fix ave/time ... file` output.
+pub fn read_ave_time(path: &Path) -> Result<Vec<Vec<f64>>, String> {
+    parse_ave_time(&read(path)?, &path.display().to_string())
+}
+
+/// Normalised root-mean-square error of `model` against `reference` (paired samples):
+/// RMSE / mean(|reference|), the paper's NRMSE (Sect. 3, Fig. 4).
+pub fn nrmse(model: &[f64], reference: &[f64]) -> f64 {
+    assert_eq!(model.len(), reference.len(), "nrmse needs paired samples");
+    let n = reference.len() as f64;
+    let mse = model.iter().zip(reference).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / n;
+    let mean = reference.iter().map(|b| b.abs()).sum::<f64>() / n;
+    mse.sqrt() / mean
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DUMP: &str = "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n2\nITEM: BOX BOUNDS ff ff ff\n0 1\n0 1\n0 1\nITEM: ATOMS id x fz \n1 0.5 -1e-3 \n2 0.25 2 \nITEM: TIMESTEP\n10\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS ff ff ff\n0 1\n0 1\n0 1\nITEM: ATOMS id x fz \n1 0.5 0 \n";
+
+    #[test]
+    fn reads_frames_with_trailing_spaces() {
+        let f = parse_dump(DUMP, "d").unwrap();
+        assert_eq!(f.len(), 2);
+        assert_eq!((f[1].step, f[0].column("fz")), (10, Some(2)));
+        assert_eq!(f[0].rows, vec![vec![1.0, 0.5, -1e-3], vec![2.0, 0.25, 2.0]]);
+    }
+
+    #[test]
+    fn malformed_dumps_name_file_and_line() {
+        let short = DUMP.replace("2 0.25 2 \n", "");
+        assert!(parse_dump(&short, "d").unwrap_err().starts_with("d:"));
+        let bad = DUMP.replace("0.25", "x");
+        assert_eq!(parse_dump(&bad, "d").unwrap_err(), "d:11: not a number in '2 x 2 '");
+        let cols = DUMP.replace("2 0.25 2 ", "2 0.25");
+        assert!(parse_dump(&cols, "d").unwrap_err().contains("2 values for 3 columns"));
+    }
+
+    #[test]
+    fn ave_time_and_nrmse() {
+        let rows = parse_ave_time("# c\n# TimeStep v\n1000 2.5\n2000 3.5\n", "a").unwrap();
+        assert_eq!(rows, vec![vec![1000.0, 2.5], vec![2000.0, 3.5]]);
+        assert!(parse_ave_time("1000 nan?\n", "a").is_err());
+        // RMSE of (1, −1) is 1, mean |reference| is 2.
+        assert_eq!(nrmse(&[3.0, 1.0], &[2.0, 2.0]), 0.5);
+    }
+}
