@@ -20,8 +20,8 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 cargo fmt --check
+# Lints for the plain build (nothing but cargo) and for the LIGGGHTS plugin (feature `liggghts`).
 cargo clippy --release --all-targets -- -D warnings
-cargo test --release
-# The LIGGGHTS plugin (feature `liggghts`): the C++ shim, `mcdem-liggghts` and its end-to-end tests.
 cargo clippy --release --all-targets --features liggghts -- -D warnings
+# One test run covers everything: the feature only adds the C++ shim, `mcdem-liggghts` and its tests.
 cargo test --release --features liggghts
