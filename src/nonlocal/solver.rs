@@ -837,7 +837,8 @@ impl Nonlocal {
                     self.walls[w].point = p;
                 }
                 self.body_factor = saved_b;
-                if depth >= self.settings.max_subdivisions {
+                // Nothing to halve when the increment is empty (the initial equilibrium).
+                if depth >= self.settings.max_subdivisions || t1 <= t0 {
                     return Err(SolveError {
                         message: format!("{} after {depth} halvings of the load increment", e.message),
                         ..e
