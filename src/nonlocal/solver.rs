@@ -808,8 +808,8 @@ impl Nonlocal {
         // a long Newton stall.
         let full = self.settings;
         if full.fire_fallback_steps > 0 {
-            self.settings.max_newton = full.max_newton.min(12);
-            self.settings.max_active_rounds = full.max_active_rounds.min(4);
+            self.settings.max_newton = full.max_newton.min(8);
+            self.settings.max_active_rounds = full.max_active_rounds.min(2);
         }
         let first = self.solve();
         self.settings = full;
