@@ -37,11 +37,12 @@ fn compress(s: &mut Nonlocal, top0: Vec3, disp: f64, steps: usize) -> Vec<Vec<f6
     let walls = s.walls();
     let mut out = Vec::new();
     let path = |t: f64| {
-        walls
+        let points = walls
             .iter()
             .enumerate()
             .map(|(w, wall)| if w == 5 { top0 - Vec3::z() * (t * disp) } else { wall.point })
-            .collect()
+            .collect();
+        (points, 0.0)
     };
     for k in 1..=steps {
         let st = s.advance(&path, (k - 1) as f64 / steps as f64, k as f64 / steps as f64).unwrap();

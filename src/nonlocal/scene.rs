@@ -63,6 +63,20 @@ pub struct SceneSpec {
     /// Solid volume for φ [m³]; default: the sum of the sphere volumes.
     #[serde(default)]
     pub solid_volume: Option<f64>,
+    /// Gravity [m/s²]: with it, step 0 is the equilibrium under gravity (a packing settled in a
+    /// DEM run), then `gravity_release_steps` steps ramp it to zero with the walls fixed, then the
+    /// loading path runs. With `gravity_release_steps` = 0 gravity stays on throughout.
+    #[serde(default)]
+    pub gravity: Option<[f64; 3]>,
+    #[serde(default)]
+    pub gravity_release_steps: usize,
+    /// Particle density [kg/m³] for inline spheres (data files carry their own).
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// Pre-relax the initial packing by FIRE with plain Hertz contacts before step 0 (for snapshots
+    /// that are not at rest): maximum FIRE steps (0 = off).
+    #[serde(default)]
+    pub prerelax_steps: usize,
     #[serde(default)]
     pub tolerance: Option<f64>,
     #[serde(default)]
@@ -78,8 +92,8 @@ fn one() -> f64 {
 }
 
 /// Reads the `Atoms` section of a LIGGGHTS data file (atom_style sphere: `id type diameter density
-/// x y z [ix iy iz]`). Every particle gets `material`.
-pub fn read_liggghts_data(path: &Path, material: Material) -> Result<Vec<Sphere>, String> {
+/// x y z [ix iy iz]`). Every particle gets `material`. Returns the spheres and their densities.
+pub fn read_liggghts_data(path: &Path, material: Material) -> Result<(Vec<Sphere>, Vec<f64>), String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let mut expected: Option<usize> = None;
     let mut lines = text.lines().enumerate();
@@ -95,6 +109,7 @@ pub fn read_liggghts_data(path: &Path, material: Material) -> Result<Vec<Sphere>
     }
     let expected = expected.ok_or_else(|| format!("{}: no 'N atoms' header line", path.display()))?;
     let mut out = Vec::with_capacity(expected);
+    let mut densities = Vec::with_capacity(expected);
     for (no, line) in lines {
         let l = line.split('#').next().unwrap_or("").trim();
         if l.is_empty() {
@@ -119,7 +134,12 @@ pub fn read_liggghts_data(path: &Path, material: Material) -> Result<Vec<Sphere>
         if diameter <= 0.0 {
             return Err(bad("diameter must be > 0"));
         }
+        let density = num(3)?;
+        if density <= 0.0 {
+            return Err(bad("density must be > 0"));
+        }
         out.push(Sphere { id, x: Vec3::new(num(4)?, num(5)?, num(6)?), radius: 0.5 * diameter, material });
+        densities.push(density);
     }
     if out.len() != expected {
         return Err(format!(
@@ -128,7 +148,7 @@ pub fn read_liggghts_data(path: &Path, material: Material) -> Result<Vec<Sphere>
             out.len()
         ));
     }
-    Ok(out)
+    Ok((out, densities))
 }
 
 /// An axis-aligned box found among the walls: for each axis the indices of the low and high wall.
@@ -192,16 +212,23 @@ impl Scene {
         let spec: SceneSpec = serde_json::from_str(text).map_err(|e| format!("scene: {e}"))?;
         let pm = material(&spec.particle_material, "particle_material")?;
         let wm = material(&spec.wall_material, "wall_material")?;
-        let spheres = match (&spec.liggghts_data, &spec.spheres) {
+        let (spheres, densities) = match (&spec.liggghts_data, &spec.spheres) {
             (Some(p), None) => {
                 let p = if p.is_absolute() { p.clone() } else { base.join(p) };
                 read_liggghts_data(&p, pm)?
             }
-            (None, Some(s)) => s
-                .iter()
-                .enumerate()
-                .map(|(k, s)| Sphere { id: k as u64 + 1, x: Vec3::from(s.x), radius: s.radius, material: pm })
-                .collect(),
+            (None, Some(s)) => (
+                s.iter()
+                    .enumerate()
+                    .map(|(k, s)| Sphere {
+                        id: k as u64 + 1,
+                        x: Vec3::from(s.x),
+                        radius: s.radius,
+                        material: pm,
+                    })
+                    .collect::<Vec<_>>(),
+                vec![spec.density.unwrap_or(f64::NAN); s.len()],
+            ),
             _ => return Err("scene: give exactly one of 'liggghts_data' and 'spheres'".into()),
         };
         if spec.steps == 0 {
@@ -237,7 +264,25 @@ impl Scene {
             Some(v) => return Err(format!("scene: solid_volume {v} must be finite and > 0")),
             None => spheres.iter().map(|s| 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3)).sum(),
         };
-        let solver = Nonlocal::new(&spheres, &walls0, wm, kernel, settings)?;
+        let mut solver = Nonlocal::new(&spheres, &walls0, wm, kernel, settings)?;
+        if let Some(g) = spec.gravity {
+            let g = Vec3::from(g);
+            if !g.iter().all(|v| v.is_finite()) {
+                return Err("scene: gravity must be finite".into());
+            }
+            if densities.iter().any(|d| !(d.is_finite() && *d > 0.0)) {
+                return Err(
+                    "scene: gravity needs a density > 0 for every particle ('density' for inline spheres)"
+                        .into(),
+                );
+            }
+            let weights: Vec<Vec3> = spheres
+                .iter()
+                .zip(&densities)
+                .map(|(s, d)| g * (d * 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3)))
+                .collect();
+            solver.set_body_forces(&weights)?;
+        }
         let walls0 = solver.walls();
         Ok(Self { spec, solver, walls0, solid_volume })
     }
@@ -282,7 +327,7 @@ impl Scene {
         )
         .map_err(io)?;
         let mut header =
-            String::from("step,t,phi,coordination,contacts_pp,contacts_pw,newton_iterations,active_set_rounds,subdivisions,residual,relation_residual,seconds");
+            String::from("step,t,gravity_factor,phi,coordination,contacts_pp,contacts_pw,newton_iterations,active_set_rounds,subdivisions,fire_steps,residual,relation_residual,seconds");
         for w in &walls {
             header.push_str(&format!(",{0}_position,{0}_force,{0}_stress", w.name));
         }
@@ -291,17 +336,44 @@ impl Scene {
             std::fs::create_dir_all(d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
         }
         let steps = self.spec.steps;
+        let release = if self.spec.gravity.is_some() { self.spec.gravity_release_steps } else { 0 };
+        let gravity_on = self.spec.gravity.is_some();
+        let total = release + steps;
         let path = self.path();
+        // Load parameter u ∈ [0, release + steps]: first gravity 1 → 0 with fixed walls, then the path.
+        let load_at = |u: f64| {
+            let t = ((u - release as f64) / steps as f64).clamp(0.0, 1.0);
+            let factor = match (gravity_on, release) {
+                (false, _) => 0.0,
+                (true, 0) => 1.0,
+                (true, r) => (1.0 - u / r as f64).max(0.0),
+            };
+            (path.iter().map(|(p, d)| p + t * d).collect::<Vec<Vec3>>(), factor)
+        };
         let mut summary =
-            RunSummary { steps, wall_seconds: 0.0, final_phi: None, final_wall_forces: Vec::new() };
-        for step in 0..=steps {
-            let t1 = step as f64 / steps as f64;
-            let t0 = if step == 0 { 0.0 } else { (step - 1) as f64 / steps as f64 };
+            RunSummary { steps: total, wall_seconds: 0.0, final_phi: None, final_wall_forces: Vec::new() };
+        if self.spec.prerelax_steps > 0 {
+            let (points, factor) = load_at(0.0);
+            for (w, p) in points.into_iter().enumerate() {
+                self.solver.set_wall_point(w, p);
+            }
+            self.solver.set_body_force_factor(factor);
+            let t = Instant::now();
+            let (n, rel) = self.solver.relax_hertz(self.spec.prerelax_steps, 1e-4);
+            progress(&format!(
+                "pre-relaxation (FIRE, Hertz): {n} steps, residual {rel:.2e} ({:.2} s)",
+                t.elapsed().as_secs_f64()
+            ));
+        }
+        for step in 0..=total {
+            let u1 = step as f64;
+            let u0 = if step == 0 { 0.0 } else { u1 - 1.0 };
+            let (_, gfac) = load_at(u1);
+            let t1 = ((u1 - release as f64) / steps as f64).clamp(0.0, 1.0);
             let t_step = Instant::now();
-            let walls_at = |t: f64| path.iter().map(|(p, d)| p + t * d).collect::<Vec<Vec3>>();
             let stats: StepStats = self
                 .solver
-                .advance(&walls_at, t0, t1)
+                .advance(&load_at, u0, u1)
                 .map_err(|e| format!("load step {step} (t = {t1:.6}) did not converge: {e}"))?;
             let secs = t_step.elapsed().as_secs_f64();
             let walls = self.solver.walls();
@@ -312,11 +384,12 @@ impl Scene {
             let z = 2.0 * pp as f64 / self.solver.particle_count() as f64;
             let fmt_opt = |v: Option<f64>| v.map(|v| format!("{v:.10e}")).unwrap_or_default();
             let mut row = format!(
-                "{step},{t1:.8},{},{z:.6},{pp},{pw},{},{},{},{:.3e},{:.3e},{secs:.4}",
+                "{step},{t1:.8},{gfac:.6},{},{z:.6},{pp},{pw},{},{},{},{},{:.3e},{:.3e},{secs:.4}",
                 fmt_opt(phi),
                 stats.newton_iterations,
                 stats.active_set_rounds,
                 stats.subdivisions,
+                stats.fire_steps,
                 stats.residual,
                 stats.relation_residual
             );
@@ -342,11 +415,12 @@ impl Scene {
                 self.write_contacts(&d.join(format!("contacts_{step:05}.csv")), &walls)?;
             }
             progress(&format!(
-                "step {step}/{steps}: phi {} Z {z:.3} newton {} rounds {} halvings {} residual {:.2e} ({secs:.2} s)",
+                "step {step}/{total}: phi {} Z {z:.3} newton {} rounds {} halvings {} fire {} residual {:.2e} ({secs:.2} s)",
                 phi.map(|p| format!("{p:.4}")).unwrap_or_else(|| "-".into()),
                 stats.newton_iterations,
                 stats.active_set_rounds,
                 stats.subdivisions,
+                stats.fire_steps,
                 stats.residual
             ));
             summary.final_phi = phi;

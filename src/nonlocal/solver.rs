@@ -39,7 +39,12 @@ use crate::physics::material::{Material, PairCoeffs};
 use crate::physics::Vec3;
 
 /// Smallest reference force for the relative force-balance residual, in units of E_ref·L².
-const FORCE_FLOOR: f64 = 1e-12;
+/// 1e-9 E_ref·L² is the Hertz force of an overlap of about 1e-6 radii: below it a packing is
+/// force-free (unjammed), and the criterion becomes absolute.
+const FORCE_FLOOR: f64 = 1e-9;
+
+/// Largest centre displacement per Newton iteration, in mean radii (see the step cap in `newton`).
+const MAX_MOVE: f64 = 0.05;
 
 /// One sphere of the scene (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -78,16 +83,19 @@ pub struct Settings {
     pub max_subdivisions: u32,
     /// ε of the Jacobian tether (see the module documentation).
     pub regularisation: f64,
+    /// FIRE steps allowed when Newton fails on an increment (0: no fallback, halve at once).
+    pub fire_fallback_steps: usize,
 }
 
 impl Default for Settings {
     fn default() -> Self {
         Self {
             tolerance: 1e-9,
-            max_newton: 60,
-            max_active_rounds: 60,
-            max_subdivisions: 8,
+            max_newton: 40,
+            max_active_rounds: 30,
+            max_subdivisions: 6,
             regularisation: 1e-8,
+            fire_fallback_steps: 100_000,
         }
     }
 }
@@ -131,6 +139,8 @@ pub struct StepStats {
     pub newton_iterations: usize,
     pub active_set_rounds: usize,
     pub subdivisions: usize,
+    /// FIRE relaxation steps spent on this increment (0 when Newton alone converged).
+    pub fire_steps: usize,
     /// Force-balance residual: max over particles of |net force| / mean contact force.
     pub residual: f64,
     /// Max |relation residual| / mean radius.
@@ -176,6 +186,7 @@ struct Eval {
     force_rel: f64,
     relation_rel: f64,
     worst: usize,
+    p_mean: f64,
 }
 
 /// Pseudo-transient continuation (Kelley & Keyes, SIAM J. Numer. Anal. 35 (1998) 508): when the
@@ -203,6 +214,9 @@ pub struct Nonlocal {
     contacts: Vec<Contact>,
     /// Iterations of the last Newton solve, successful or not.
     last_iterations: usize,
+    /// External body force per particle (scaled units), e.g. weight, times `body_factor`.
+    body: Vec<Vec3>,
+    body_factor: f64,
 }
 
 fn finite3(v: &Vec3) -> bool {
@@ -258,6 +272,8 @@ impl Nonlocal {
             settings,
             contacts: Vec::new(),
             last_iterations: 0,
+            body: vec![Vec3::zeros(); spheres.len()],
+            body_factor: 0.0,
         };
         me.walls =
             ws.into_iter().map(|w| Wall { name: w.name, point: w.point / len, normal: w.normal }).collect();
@@ -277,6 +293,22 @@ impl Nonlocal {
             .iter()
             .map(|w| Wall { name: w.name.clone(), point: w.point * self.len, normal: w.normal })
             .collect()
+    }
+
+    /// Sets an external body force on every particle [N] (e.g. its weight m·g), applied times the
+    /// factor of [`Self::set_body_force_factor`] (initially 0). Used to release gravity
+    /// quasi-statically from a packing settled under gravity.
+    pub fn set_body_forces(&mut self, forces: &[Vec3]) -> Result<(), String> {
+        if forces.len() != self.x.len() || forces.iter().any(|f| !finite3(f)) {
+            return Err("body forces: one finite vector per particle is required".into());
+        }
+        let f0 = self.force_unit();
+        self.body = forces.iter().map(|f| f / f0).collect();
+        Ok(())
+    }
+
+    pub fn set_body_force_factor(&mut self, factor: f64) {
+        self.body_factor = factor;
     }
 
     /// Moves wall `w` so that its plane passes through `point` [m].
@@ -377,6 +409,13 @@ impl Nonlocal {
         let pf: Vec<(f64, f64)> =
             self.contacts.iter().zip(delta).map(|(c, &d)| Self::force_of(c, d)).collect();
 
+        if self.body_factor != 0.0 {
+            for (i, b) in self.body.iter().enumerate() {
+                for a in 0..3 {
+                    res[3 * i + a] += self.body_factor * b[a];
+                }
+            }
+        }
         let mut k_sum = 0.0;
         for (c, ct) in self.contacts.iter().enumerate() {
             let (p, dp) = pf[c];
@@ -486,7 +525,7 @@ impl Nonlocal {
             }
         }
         let relation_rel = res[3 * n..].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        Eval { res, trip, force_rel: force_max / p_mean, relation_rel, worst }
+        Eval { res, trip, force_rel: force_max / p_mean, relation_rel, worst, p_mean }
     }
 
     fn merit(r: &[f64]) -> f64 {
@@ -533,8 +572,10 @@ impl Nonlocal {
             iters += 1;
             if std::env::var_os("MCDEM_NONLOCAL_TRACE").is_some() {
                 eprintln!(
-                    "  newton {iters}: contacts {nc} force {:.3e} relation {:.3e} nnz {} sigma {sigma:.1e}",
+                    "  newton {iters}: contacts {nc} force {:.3e} (mean P {:.3e}, worst {}) relation {:.3e} nnz {} sigma {sigma:.1e}",
                     ev.force_rel,
+                    ev.p_mean,
+                    self.ids[ev.worst],
                     ev.relation_rel,
                     ev.trip.len()
                 );
@@ -544,9 +585,20 @@ impl Nonlocal {
             let lu = jm.sp_lu().map_err(|e| self.fail(format!("sparse LU failed: {e:?}"), &ev))?;
             let mut rhs = Mat::<f64>::from_fn(dim, 1, |i, _| -ev.res[i]);
             lu.solve_in_place(rhs.as_mut());
-            let step: Vec<f64> = (0..dim).map(|i| rhs[(i, 0)]).collect();
+            let mut step: Vec<f64> = (0..dim).map(|i| rhs[(i, 0)]).collect();
             if step.iter().any(|v| !v.is_finite()) {
                 return Err(self.fail("singular Jacobian (non-finite Newton step)".into(), &ev));
+            }
+            // Step cap: a particle on a floppy mode (tether only) with a non-zero net force gets a
+            // Newton move of order force/tether, far beyond the range where the linearisation (and
+            // the active set) is valid. Scale the whole step so that no centre moves more than
+            // MAX_MOVE mean radii per iteration.
+            let max_move = (0..n)
+                .map(|i| (step[3 * i].powi(2) + step[3 * i + 1].powi(2) + step[3 * i + 2].powi(2)).sqrt())
+                .fold(0.0, f64::max);
+            if max_move > MAX_MOVE {
+                let f = MAX_MOVE / max_move;
+                step.iter_mut().for_each(|v| *v *= f);
             }
             let m0 = Self::merit(&ev.res);
             let mut alpha = 1.0;
@@ -723,20 +775,21 @@ impl Nonlocal {
         Ok(stats)
     }
 
-    /// Advances the loading parameter from `t0` to `t1`: `walls_at(t)` gives every wall's point [m].
+    /// Advances the loading parameter from `t0` to `t1`: `load_at(t)` gives every wall's point [m]
+    /// and the body-force factor.
     /// A failing increment is restored and halved, at most `Settings::max_subdivisions` times deep.
     pub fn advance(
         &mut self,
-        walls_at: &dyn Fn(f64) -> Vec<Vec3>,
+        load_at: &dyn Fn(f64) -> (Vec<Vec3>, f64),
         t0: f64,
         t1: f64,
     ) -> Result<StepStats, SolveError> {
-        self.advance_depth(walls_at, t0, t1, 0)
+        self.advance_depth(load_at, t0, t1, 0)
     }
 
     fn advance_depth(
         &mut self,
-        walls_at: &dyn Fn(f64) -> Vec<Vec3>,
+        load_at: &dyn Fn(f64) -> (Vec<Vec3>, f64),
         t0: f64,
         t1: f64,
         depth: u32,
@@ -744,10 +797,38 @@ impl Nonlocal {
         let saved_x = self.x.clone();
         let saved_c = self.contacts.clone();
         let saved_w: Vec<Vec3> = self.walls.iter().map(|w| w.point).collect();
-        for (w, p) in walls_at(t1).into_iter().enumerate() {
+        let saved_b = self.body_factor;
+        let (points, factor) = load_at(t1);
+        for (w, p) in points.into_iter().enumerate() {
             self.set_wall_point(w, p);
         }
-        match self.solve() {
+        self.body_factor = factor;
+        // Warm-started Newton first, on a short budget when a FIRE fallback is available: a step
+        // that needs a rearrangement does not converge in a few iterations, and FIRE is cheaper than
+        // a long Newton stall.
+        let full = self.settings;
+        if full.fire_fallback_steps > 0 {
+            self.settings.max_newton = full.max_newton.min(8);
+            self.settings.max_active_rounds = full.max_active_rounds.min(2);
+        }
+        let first = self.solve();
+        self.settings = full;
+        // A failed increment is usually a rearrangement (contacts opening, particles sliding into
+        // new positions), which Newton cannot follow: relax with FIRE + Hertz at this load, then
+        // let Newton add the nonlocal terms, before halving the increment.
+        let result = match first {
+            Ok(s) => Ok(s),
+            Err(_) if self.settings.fire_fallback_steps > 0 => {
+                self.x = saved_x.clone();
+                let (fire_steps, _) = self.relax_hertz(self.settings.fire_fallback_steps, 1e-4);
+                self.solve().map(|mut s| {
+                    s.fire_steps += fire_steps;
+                    s
+                })
+            }
+            Err(e) => Err(e),
+        };
+        match result {
             Ok(s) => Ok(s),
             Err(e) => {
                 self.x = saved_x;
@@ -755,24 +836,131 @@ impl Nonlocal {
                 for (w, p) in saved_w.into_iter().enumerate() {
                     self.walls[w].point = p;
                 }
-                if depth >= self.settings.max_subdivisions {
+                self.body_factor = saved_b;
+                // Nothing to halve when the increment is empty (the initial equilibrium).
+                if depth >= self.settings.max_subdivisions || t1 <= t0 {
                     return Err(SolveError {
                         message: format!("{} after {depth} halvings of the load increment", e.message),
                         ..e
                     });
                 }
                 let tm = 0.5 * (t0 + t1);
-                let a = self.advance_depth(walls_at, t0, tm, depth + 1)?;
-                let b = self.advance_depth(walls_at, tm, t1, depth + 1)?;
+                let a = self.advance_depth(load_at, t0, tm, depth + 1)?;
+                let b = self.advance_depth(load_at, tm, t1, depth + 1)?;
                 Ok(StepStats {
                     newton_iterations: a.newton_iterations + b.newton_iterations,
                     active_set_rounds: a.active_set_rounds + b.active_set_rounds,
                     subdivisions: a.subdivisions + b.subdivisions + 1,
+                    fire_steps: a.fire_steps + b.fire_steps,
                     residual: b.residual,
                     relation_residual: b.relation_residual,
                 })
             }
         }
+    }
+
+    /// Hertz forces (no nonlocal term) on every particle at centres `x`, plus the body forces;
+    /// returns the net forces and the mean contact force (scaled units).
+    fn hertz_forces(&self, x: &[Vec3], candidates: &[(usize, usize)]) -> (Vec<Vec3>, f64) {
+        let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
+        let (mut sum, mut cnt) = (0.0, 0usize);
+        let mut add = |i: usize, other: Other, f: &mut Vec<Vec3>| {
+            let g = self.geometry(x, i, other);
+            if g.gamma > 0.0 {
+                let c = Contact { i, other, delta: g.gamma, k: self.stiffness(i, other) };
+                let p = Self::force_of(&c, g.gamma).0;
+                f[i] -= g.e * p;
+                if let Other::Particle(j) = other {
+                    f[j] += g.e * p;
+                }
+                sum += p;
+                cnt += 1;
+            }
+        };
+        for &(i, j) in candidates {
+            add(i, Other::Particle(j), &mut f);
+        }
+        for i in 0..x.len() {
+            for w in 0..self.walls.len() {
+                add(i, Other::Wall(w), &mut f);
+            }
+        }
+        (f, if cnt > 0 { sum / cnt as f64 } else { 0.0 })
+    }
+
+    /// Pre-relaxation of a packing that is not in equilibrium (e.g. a DEM snapshot in motion):
+    /// FIRE energy minimisation (Bitzek et al., Phys. Rev. Lett. 97 (2006) 170201) with plain Hertz
+    /// contacts, unit masses, at the current walls and body forces. Newton cannot do this job: far
+    /// from equilibrium the packing has to rearrange, which is a minimisation, not a root-finding
+    /// problem. Stops when max |net force| ≤ `ftol` × mean contact force or after `max_steps`.
+    /// Returns (steps, final relative residual). Clears the active set.
+    pub fn relax_hertz(&mut self, max_steps: usize, ftol: f64) -> (usize, f64) {
+        let n = self.x.len();
+        let mut x = self.x.clone();
+        let mut v = vec![Vec3::zeros(); n];
+        let (dt0, dt_max): (f64, f64) = (0.05, 0.5);
+        let (mut dt, mut alpha, mut since_neg) = (dt0, 0.1, 0usize);
+        let mut candidates: Vec<(usize, usize)> = Vec::new();
+        let mut x_list = x.clone();
+        let rmax = self.r.iter().cloned().fold(0.0, f64::max);
+        let skin = 0.3 * rmax;
+        let rebuild = |x: &[Vec3], c: &mut Vec<(usize, usize)>| {
+            c.clear();
+            for i in 0..n {
+                for j in i + 1..n {
+                    if (x[j] - x[i]).norm() < self.r[i] + self.r[j] + skin {
+                        c.push((i, j));
+                    }
+                }
+            }
+        };
+        rebuild(&x, &mut candidates);
+        let mut rel = f64::INFINITY;
+        let mut step = 0;
+        while step < max_steps {
+            step += 1;
+            if x.iter().zip(&x_list).any(|(a, b)| (a - b).norm() > 0.5 * skin) {
+                rebuild(&x, &mut candidates);
+                x_list = x.clone();
+            }
+            let (f, pmean) = self.hertz_forces(&x, &candidates);
+            let fmax = f.iter().map(|f| f.norm()).fold(0.0, f64::max);
+            rel = fmax / pmean.max(FORCE_FLOOR);
+            if rel <= ftol {
+                break;
+            }
+            let power: f64 = f.iter().zip(&v).map(|(f, v)| f.dot(v)).sum();
+            let fnorm = f.iter().map(|f| f.norm_squared()).sum::<f64>().sqrt();
+            let vnorm = v.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
+            if power > 0.0 {
+                for (vi, fi) in v.iter_mut().zip(&f) {
+                    *vi = *vi * (1.0 - alpha) + fi * (alpha * vnorm / fnorm.max(1e-300));
+                }
+                since_neg += 1;
+                if since_neg > 5 {
+                    dt = (dt * 1.1).min(dt_max);
+                    alpha *= 0.99;
+                }
+            } else {
+                since_neg = 0;
+                dt *= 0.5;
+                alpha = 0.1;
+                v.iter_mut().for_each(|v| *v = Vec3::zeros());
+            }
+            // Semi-implicit Euler with unit masses; a move cap keeps contacts in the list valid.
+            for i in 0..n {
+                v[i] += f[i] * dt;
+                let mut dx = v[i] * dt;
+                let m = dx.norm();
+                if m > 0.1 * skin {
+                    dx *= 0.1 * skin / m;
+                }
+                x[i] += dx;
+            }
+        }
+        self.x = x;
+        self.contacts.clear();
+        (step, rel)
     }
 
     /// Active contacts in SI units.
