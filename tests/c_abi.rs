@@ -43,6 +43,15 @@ fn compile_and_run(dir: &Path) -> HashMap<String, String> {
         .out_dir(dir)
         .get_compiler();
     let exe = dir.join("abi_check");
+    // With the `liggghts` feature the static library also carries the C++ shim, so a C program
+    // linking it needs what the shim needs: LIGGGHTS, MPI (as mpicxx links it) and libstdc++.
+    let mut plugin_libs: Vec<String> = Vec::new();
+    if cfg!(feature = "liggghts") {
+        let out = Command::new("mpicxx").arg("--showme:link").output().expect("mpicxx runs");
+        plugin_libs.push("-lliggghts".into());
+        plugin_libs.extend(String::from_utf8_lossy(&out.stdout).split_whitespace().map(String::from));
+        plugin_libs.push("-lstdc++".into());
+    }
     let status = compiler
         .to_command()
         .args(["-std=c99", "-Wall", "-Werror", "-I"])
@@ -51,6 +60,7 @@ fn compile_and_run(dir: &Path) -> HashMap<String, String> {
         .arg("-o")
         .arg(&exe)
         .arg(static_lib())
+        .args(&plugin_libs)
         .args(["-lpthread", "-ldl", "-lm"])
         .status()
         .expect("C compiler runs");
