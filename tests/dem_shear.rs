@@ -1,0 +1,155 @@
+//! Lees–Edwards simple shear (`fix deform … xy erate … remap v`) and the stress/coordination
+//! computes: hand-computable static lattice, streaming profile, momentum.
+
+use std::process::Command;
+
+fn run(dir: &std::path::Path, deck: &str) -> String {
+    std::fs::write(dir.join("in.t"), deck).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+        .current_dir(dir)
+        .args(["run", "in.t", "-log", "none", "--no-progress"])
+        .output()
+        .unwrap();
+    let s = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{s}");
+    s
+}
+
+/// Simple cubic lattice of n³ spheres of diameter d, spacing a, in a periodic cube of side n a.
+fn lattice(dir: &std::path::Path, n: usize, a: f64, d: f64, jitter: f64) {
+    let mut s = format!(
+        "lattice\n\n{} atoms\n1 atom types\n0 {l} xlo xhi\n0 {l} ylo yhi\n0 {l} zlo zhi\n\nAtoms\n\n",
+        n * n * n,
+        l = n as f64 * a
+    );
+    let mut id = 1;
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                // Small deterministic jitter off the grid keeps a sheared lattice from locking.
+                let jit = if jitter > 0.0 { 1e-3 } else { 0.0 } * a * (((id * 7919) % 13) as f64 - 6.0) / 6.0;
+                s += &format!(
+                    "{id} 1 {d} 1000 {} {} {}\n",
+                    (i as f64 + 0.5) * a + jit,
+                    (j as f64 + 0.5) * a,
+                    (k as f64 + 0.5) * a - jit
+                );
+                id += 1;
+            }
+        }
+    }
+    // Pseudo-random vy, vz of amplitude `jitter` m/s with zero mean: collisions between the
+    // sliding lattice rows (vx comes from the velocity ramp).
+    let nat = n * n * n;
+    let mut st: u64 = 12345;
+    let mut rnd = || {
+        st = st.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (st >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let v: Vec<(f64, f64)> = (0..nat).map(|_| (rnd() * jitter, rnd() * jitter)).collect();
+    let (my, mz) = v.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0 / nat as f64, a.1 + b.1 / nat as f64));
+    s += "\nVelocities\n\n";
+    for (i, (vy, vz)) in v.iter().enumerate() {
+        s += &format!("{} 0 {} {} 0 0 0\n", i + 1, vy - my, vz - mz);
+    }
+    std::fs::write(dir.join("data.lat"), s).unwrap();
+}
+
+const HEAD: &str = "units si
+atom_style sphere
+boundary p p p
+read_data data.lat
+neighbor 0.0002 bin
+fix m1 all property/global youngsModulus peratomtype 1e7
+fix m2 all property/global poissonsRatio peratomtype 0.3
+fix m3 all property/global coefficientRestitution peratomtypepair 1 E
+fix m4 all property/global coefficientFriction peratomtypepair 1 MU
+pair_style gran model hertz tangential history
+pair_coeff * *
+timestep 1e-6
+fix integr all nve/sphere
+compute s all stress/mcdem
+compute z all coord/mcdem
+";
+
+fn last_thermo(out: &str, ncol: usize) -> Vec<f64> {
+    out.lines()
+        .filter_map(|l| {
+            let v: Vec<f64> = l.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+            (v.len() == ncol && l.split_whitespace().count() == ncol).then_some(v)
+        })
+        .last()
+        .expect("thermo line")
+}
+
+#[test]
+fn compressed_cubic_lattice_pressure_and_coordination() {
+    let dir = tempfile::tempdir().unwrap();
+    let (n, d, a) = (4, 0.002, 0.002 * 0.99);
+    lattice(dir.path(), n, a, d, 0.0);
+    let deck = HEAD.replace("E\n", "0.9\n").replace("MU\n", "0.0\n")
+        + "thermo_style custom step c_z c_s c_s[11] c_s[12] c_s[2] c_s[4]\nthermo 1\nrun 1\n";
+    let out = run(dir.path(), &deck);
+    let v = last_thermo(&out, 7);
+    // Hertz by hand: E* = E / (2 (1 − ν²)), R = d/4, δ = d − a, F = 4/3 E* √(R δ) δ, p = F / a².
+    let es = 1e7 / (2.0 * (1.0 - 0.09));
+    let delta = d - a;
+    let f = 4.0 / 3.0 * es * (d / 4.0 * delta).sqrt() * delta;
+    let p = f / (a * a);
+    assert!((v[1] - 6.0).abs() < 1e-12, "Z = {}", v[1]);
+    assert!(((v[3] - p) / p).abs() < 1e-3, "contact p {} vs {p}", v[3]);
+    assert!(v[5].abs() < 1e-9 * p && v[6].abs() < 1e-9 * p, "off-diagonal {} {}", v[5], v[6]);
+}
+
+#[test]
+fn lees_edwards_streaming_profile_and_momentum() {
+    let dir = tempfile::tempdir().unwrap();
+    // 343 spheres, φ ≈ 0.39 (gas-like), γ̇ = 50 /s.
+    let (n, d, a) = (7, 0.002, 0.0022);
+    lattice(dir.path(), n, a, d, 0.5);
+    let l = n as f64 * a;
+    let rate = 50.0;
+    let deck = HEAD.replace("E\n", "0.7\n").replace("MU\n", "0.5\n")
+        + &format!(
+            "velocity all ramp vx {} {} y 0 {l} units box\n\
+             fix sh all deform 1 xy erate {rate} remap v\n\
+             thermo_style custom step c_z c_s[2] c_s[4] c_s[10]\nthermo 5000\n\
+             run 40000\n\
+             dump d all custom 40000 dump.sh id x y z vx vy vz\n\
+             dump_modify d format \"%d %.15g %.15g %.15g %.15g %.15g %.15g\"\n\
+             run 0\n",
+            -0.5 * rate * l,
+            0.5 * rate * l
+        );
+    let _ = run(dir.path(), &deck);
+    let text = std::fs::read_to_string(dir.path().join("dump.sh")).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
+        .skip(1)
+        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), n * n * n);
+    // Momentum: the peculiar momentum Σ m (v − u(y)) is what Lees–Edwards conserves (a particle
+    // crossing the sheared boundary changes v_x and u_x by the same jump); it starts at zero.
+    // Positions are not yet wrapped between rebuilds, so y and v_x stay consistent.
+    let ymid = 0.5 * l;
+    let vscale = rate * l;
+    let m: Vec<f64> = (4..7)
+        .map(|c| {
+            let u = |r: &Vec<f64>| if c == 4 { rate * (r[2] - ymid) } else { 0.0 };
+            rows.iter().map(|r| r[c] - u(r)).sum::<f64>() / rows.len() as f64
+        })
+        .collect();
+    eprintln!("mean peculiar velocity {m:?} (scale {vscale})");
+    assert!(m.iter().all(|x| x.abs() < 1e-10 * vscale), "mean peculiar velocity {m:?}");
+    // Streaming profile: least-squares slope of vx(y) ≈ γ̇.
+    let pts: Vec<(f64, f64)> = rows.iter().map(|r| (r[2], r[4])).collect();
+    let nn = pts.len() as f64;
+    let (my, mv) = (pts.iter().map(|p| p.0).sum::<f64>() / nn, pts.iter().map(|p| p.1).sum::<f64>() / nn);
+    let sxy: f64 = pts.iter().map(|p| (p.0 - my) * (p.1 - mv)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - my).powi(2)).sum();
+    let slope = sxy / sxx;
+    eprintln!("slope {slope} vs {rate}");
+    assert!((slope - rate).abs() < 0.15 * rate, "profile slope {slope} vs γ̇ = {rate}");
+}
