@@ -74,11 +74,11 @@ compute z all coord/mcdem
 
 fn last_thermo(out: &str, ncol: usize) -> Vec<f64> {
     out.lines()
-        .filter_map(|l| {
+        .rev()
+        .find_map(|l| {
             let v: Vec<f64> = l.split_whitespace().filter_map(|t| t.parse().ok()).collect();
             (v.len() == ncol && l.split_whitespace().count() == ncol).then_some(v)
         })
-        .last()
         .expect("thermo line")
 }
 
@@ -152,4 +152,102 @@ fn lees_edwards_streaming_profile_and_momentum() {
     let slope = sxy / sxx;
     eprintln!("slope {slope} vs {rate}");
     assert!((slope - rate).abs() < 0.15 * rate, "profile slope {slope} vs γ̇ = {rate}");
+}
+
+/// FCC start of 4·nc³ spheres at packing fraction phi in a periodic cube, with zero-mean
+/// pseudo-random velocities of 0.1 m/s; returns the box side.
+fn fcc(dir: &std::path::Path, nc: usize, phi: f64, d: f64) -> f64 {
+    let n = 4 * nc * nc * nc;
+    let l = (n as f64 * std::f64::consts::PI * d.powi(3) / 6.0 / phi).cbrt();
+    let a = l / nc as f64;
+    let mut st: u64 = 99;
+    let mut rnd = || {
+        st = st.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        0.2 * ((st >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+    };
+    let mut s =
+        format!("fcc\n\n{n} atoms\n1 atom types\n0 {l} xlo xhi\n0 {l} ylo yhi\n0 {l} zlo zhi\n\nAtoms\n\n");
+    let mut id = 1;
+    for x in 0..nc {
+        for y in 0..nc {
+            for z in 0..nc {
+                for b in [[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]] {
+                    let p = [x as f64 + b[0] + 0.25, y as f64 + b[1] + 0.25, z as f64 + b[2] + 0.25];
+                    s += &format!("{id} 1 {d} 1000 {} {} {}\n", p[0] * a, p[1] * a, p[2] * a);
+                    id += 1;
+                }
+            }
+        }
+    }
+    let v: Vec<[f64; 3]> = (0..n).map(|_| [rnd(), rnd(), rnd()]).collect();
+    let m: Vec<f64> = (0..3).map(|k| v.iter().map(|w| w[k]).sum::<f64>() / n as f64).collect();
+    s += "\nVelocities\n\n";
+    for (i, w) in v.iter().enumerate() {
+        s += &format!("{} {} {} {} 0 0 0\n", i + 1, w[0] - m[0], w[1] - m[1], w[2] - m[2]);
+    }
+    std::fs::write(dir.join("data.lat"), s).unwrap();
+    l
+}
+
+/// Steady shear of 256 frictionless spheres at φ = 0.5 (below jamming): time averages of
+/// Z, p, σ_xy, σ_yx over the second half of 40 000 steps of 2 µs (strain 0.8 per half at γ̇ = 20 /s).
+fn sheared_gas(rate: f64) -> Vec<f64> {
+    let dir = tempfile::tempdir().unwrap();
+    let l = fcc(dir.path(), 4, 0.5, 0.002);
+    let deck =
+        HEAD.replace("E\n", "0.7\n").replace("MU\n", "0.0\n").replace("timestep 1e-6", "timestep 2e-6")
+            + &format!(
+                "velocity all ramp vx {} {} y 0 {l} sum yes units box\n\
+             fix sh all deform 1 xy erate {rate} remap v\n\
+             thermo 0\nrun 20000\n\
+             fix av all ave/time 10 2000 20000 c_z c_s c_s[2] c_s[4] file ave.txt\n\
+             run 20000\n",
+                -0.5 * rate * l,
+                0.5 * rate * l
+            );
+    let _ = run(dir.path(), &deck);
+    let text = std::fs::read_to_string(dir.path().join("ave.txt")).unwrap();
+    let last = text.lines().next_back().unwrap();
+    last.split_whitespace().skip(1).map(|t| t.parse().unwrap()).collect()
+}
+
+#[test]
+fn kinetic_regime_pressure_scales_with_rate_squared_and_stress_is_symmetric() {
+    let slow = sheared_gas(20.0);
+    let fast = sheared_gas(80.0);
+    eprintln!("γ̇ = 20: {slow:?}\nγ̇ = 80: {fast:?}");
+    for s in [&slow, &fast] {
+        // μ = 0: every contact force is parallel to its branch vector, σ_xy = σ_yx.
+        assert!((s[2] - s[3]).abs() <= 1e-9 * s[1], "σ_xy {} σ_yx {}", s[2], s[3]);
+        // Shear resists the motion: σ_xy < 0 with compression positive.
+        assert!(s[2] < 0.0 && s[1] > 0.0);
+    }
+    // Bagnold scaling p ∝ γ̇²: ×4 in rate ⇒ ×16 in pressure (measured 16.4 with 256 spheres).
+    let ratio = fast[1] / slow[1];
+    assert!((11.0..24.0).contains(&ratio), "p ratio {ratio} for a rate ratio 4");
+}
+
+#[test]
+fn bad_shear_input_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    lattice(dir.path(), 3, 0.0022, 0.002, 0.0);
+    let cases = [
+        ("boundary p p p", "fix sh all deform 1 xz erate 5 remap v", "unsupported fix deform form"),
+        ("boundary p f p", "fix sh all deform 1 xy erate 5 remap v", "needs periodic x and y"),
+        ("boundary p p p", "velocity all ramp vx 0 1 y 1 0", "must exceed YLO"),
+        ("boundary p p p", "thermo_style custom step c_s[13]\nrun 1", "out of range 1..12"),
+    ];
+    for (bnd, line, msg) in cases {
+        let deck = HEAD.replace("E\n", "0.7\n").replace("MU\n", "0.0\n").replace("boundary p p p", bnd)
+            + line
+            + "\n";
+        std::fs::write(dir.path().join("in.t"), deck).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+            .current_dir(dir.path())
+            .args(["run", "in.t", "-log", "none", "--no-progress"])
+            .output()
+            .unwrap();
+        let s = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(!o.status.success() && s.contains("ERROR") && s.contains(msg), "{line}: {s}");
+    }
 }

@@ -778,7 +778,7 @@ impl Deck {
                 ));
             }
             let (vlo, vhi, ylo, yhi) = (num(a[4])?, num(a[5])?, num(a[7])?, num(a[8])?);
-            if !(yhi > ylo) {
+            if yhi <= ylo || !(yhi - ylo).is_finite() {
                 return Err(format!("velocity ramp: YHI ({yhi}) must exceed YLO ({ylo})"));
             }
             let mut sum = false;

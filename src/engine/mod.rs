@@ -494,9 +494,10 @@ impl World {
         self.need_build = false;
         self.builds += 1;
         let domain = self.domain.expect("domain checked in setup");
-        // Periodic wrap and lost-particle check happen at rebuilds, as in LAMMPS.
+        // Periodic wrap and lost-particle check happen at rebuilds, as in LAMMPS. y first: a
+        // Lees–Edwards crossing shifts x, which is then wrapped too.
         for i in 0..self.p.len() {
-            for a in 0..3 {
+            for a in [1, 0, 2] {
                 let (lo, hi) = (domain.lo[a], domain.hi[a]);
                 let xi = &mut self.p.x[i];
                 let x = &mut xi[a];
@@ -975,20 +976,12 @@ impl World {
             }
             let mut d = self.p.x[pr.i as usize] - self.p.x[pr.j as usize];
             domain.minimum_image(&mut d);
-            for a in 0..3 {
-                for b in 0..3 {
-                    sc[a][b] += d[a] * pr.force[b] / vol;
-                }
-            }
+            add_outer(&mut sc, &d, &(pr.force / vol));
         }
         for i in 0..self.p.len() {
             let mut v = self.p.v[i];
             v.x -= domain.streaming_vx(self.p.x[i].y);
-            for a in 0..3 {
-                for b in 0..3 {
-                    sk[a][b] += self.p.mass[i] * v[a] * v[b] / vol;
-                }
-            }
+            add_outer(&mut sk, &v, &(v * (self.p.mass[i] / vol)));
         }
         (sc, sk)
     }
@@ -1111,6 +1104,15 @@ impl PairCtx<'_> {
             pr.rj_prev = rj;
         }
         Ok(out)
+    }
+}
+
+/// s += u ⊗ w.
+fn add_outer(s: &mut [[f64; 3]; 3], u: &Vec3, w: &Vec3) {
+    for (row, ua) in s.iter_mut().zip(u.iter()) {
+        for (sab, wb) in row.iter_mut().zip(w.iter()) {
+            *sab += ua * wb;
+        }
     }
 }
 
