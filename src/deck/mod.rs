@@ -342,7 +342,7 @@ impl Deck {
                 (Some(ComputeKind::Ke), None) => Ok(w.kinetic_energy()),
                 (Some(ComputeKind::Coord), None) => {
                     let n = w.p.len().max(1) as f64;
-                    Ok(2.0 * w.contact_counts().0 as f64 / n)
+                    Ok(2.0 * w.pair_contacts() as f64 / n)
                 }
                 (Some(ComputeKind::Stress), k) => {
                     let (sc, sk) = w.stress_parts();

@@ -986,6 +986,11 @@ impl World {
         (sc, sk)
     }
 
+    /// Particle–particle contacts carrying a force at the last force pass (set-up pass included).
+    pub fn pair_contacts(&self) -> usize {
+        self.pairs.iter().filter(|p| p.force != Vec3::zeros()).count()
+    }
+
     pub fn contact_counts(&self) -> (usize, usize) {
         let pp = self.pairs.iter().filter(|p| p.fn_prev > 0.0).count();
         let pw = self.wc.iter().filter(|c| c.fn_prev > 0.0).count();
@@ -1061,9 +1066,10 @@ impl PairCtx<'_> {
         let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
         let radsum = ri + rj;
         if d.norm_squared() >= radsum * radsum {
+            // The force is output, not history: the set-up pass records it too.
+            pr.force = Vec3::zeros();
             if self.update {
                 pr.shear = Vec3::zeros();
-                pr.force = Vec3::zeros();
                 pr.fn_prev = 0.0;
                 pr.ri_prev = ri;
                 pr.rj_prev = rj;
@@ -1096,9 +1102,9 @@ impl PairCtx<'_> {
             Some(cf) => (Some((cf.force_i, cf.torque_i, cf.torque_j)), cf.force_i.dot(&cf.en).abs()),
             None => (None, 0.0),
         };
+        pr.force = out.map_or(Vec3::zeros(), |o| o.0);
         if self.update {
             pr.shear = shear;
-            pr.force = out.map_or(Vec3::zeros(), |o| o.0);
             pr.fn_prev = fnorm;
             pr.ri_prev = ri_stored;
             pr.rj_prev = rj;
