@@ -9,7 +9,7 @@ use mcdem::physics::{Material, Vec3};
 fn gas(restitution: f64, friction: f64, dt: f64) -> World {
     let mut w = World::new();
     let l = 0.012;
-    w.domain = Some(Domain { lo: Vec3::zeros(), hi: Vec3::repeat(l), periodic: [true; 3] });
+    w.domain = Some(Domain::new(Vec3::zeros(), Vec3::repeat(l), [true; 3]));
     w.set_materials(vec![Material::hertz(1e6, 0.3).unwrap()], &[restitution], &[friction]).unwrap();
     w.closure = Some(Closure::Hertz);
     w.dt = dt;
@@ -91,7 +91,7 @@ fn too_large_time_step_stops_with_particle_and_step() {
 fn runaway_overlap_stops_with_particle_and_step() {
     // Two spheres driven into each other far faster than the contact can resist.
     let mut w = World::new();
-    w.domain = Some(Domain { lo: Vec3::repeat(-0.01), hi: Vec3::repeat(0.01), periodic: [false; 3] });
+    w.domain = Some(Domain::new(Vec3::repeat(-0.01), Vec3::repeat(0.01), [false; 3]));
     w.set_materials(vec![Material::hertz(1e3, 0.3).unwrap()], &[1.0], &[0.0]).unwrap();
     w.closure = Some(Closure::Hertz);
     w.dt = 1e-6;

@@ -73,12 +73,18 @@ enum FixKind {
     Nve,
     AveTime(usize),
     MultiContact,
+    Deform,
 }
 
 #[derive(Debug, Clone)]
 enum ComputeKind {
     ERotate,
     Ke,
+    /// Eq. 4 stress: scalar p; vector [1..9] σ row-major (xx xy xz yx yy yz zx zy zz),
+    /// [10] p, [11] contact p, [12] kinetic p.
+    Stress,
+    /// Coordination number Z = 2 N_c / N (particle–particle contacts).
+    Coord,
 }
 
 struct Deck {
@@ -330,10 +336,27 @@ impl Deck {
             };
         }
         if let Some(c) = name.strip_prefix("c_") {
-            return match self.computes.get(c) {
-                Some(ComputeKind::ERotate) => Ok(w.rotational_energy()),
-                Some(ComputeKind::Ke) => Ok(w.kinetic_energy()),
-                None => Err(format!("unknown compute {c}")),
+            let (id, idx) = split_index(c)?;
+            return match (self.computes.get(id), idx) {
+                (Some(ComputeKind::ERotate), None) => Ok(w.rotational_energy()),
+                (Some(ComputeKind::Ke), None) => Ok(w.kinetic_energy()),
+                (Some(ComputeKind::Coord), None) => {
+                    let n = w.p.len().max(1) as f64;
+                    Ok(2.0 * w.pair_contacts() as f64 / n)
+                }
+                (Some(ComputeKind::Stress), k) => {
+                    let (sc, sk) = w.stress_parts();
+                    let tr = |s: &[[f64; 3]; 3]| (s[0][0] + s[1][1] + s[2][2]) / 3.0;
+                    match k.unwrap_or(10) {
+                        k @ 1..=9 => Ok(sc[(k - 1) / 3][(k - 1) % 3] + sk[(k - 1) / 3][(k - 1) % 3]),
+                        10 => Ok(tr(&sc) + tr(&sk)),
+                        11 => Ok(tr(&sc)),
+                        12 => Ok(tr(&sk)),
+                        k => Err(format!("compute {id} (stress/mcdem): index {k} out of range 1..12")),
+                    }
+                }
+                (Some(_), Some(k)) => Err(format!("compute {id} is a scalar: no index [{k}]")),
+                (None, _) => Err(format!("unknown compute {id}")),
             };
         }
         if let Some(f) = name.strip_prefix("f_") {
@@ -528,6 +551,8 @@ impl Deck {
                 let kind = match a[3] {
                     "erotate/sphere" => ComputeKind::ERotate,
                     "ke" => ComputeKind::Ke,
+                    "stress/mcdem" => ComputeKind::Stress,
+                    "coord/mcdem" => ComputeKind::Coord,
                     other => return Err(unsupported(&format!("compute style {other}"))),
                 };
                 if a.len() > 4 {
@@ -595,7 +620,7 @@ impl Deck {
         if (0..3).any(|k| hi[k].partial_cmp(&lo[k]) != Some(std::cmp::Ordering::Greater)) {
             return Err("box bounds must have hi > lo".into());
         }
-        self.world.domain = Some(Domain { lo, hi, periodic: self.periodic });
+        self.world.domain = Some(Domain::new(lo, hi, self.periodic));
         Ok(())
     }
 
@@ -744,6 +769,36 @@ impl Deck {
     }
 
     fn velocity(&mut self, a: &[&str]) -> R<()> {
+        if a.get(2) == Some(&"ramp") {
+            // `velocity all ramp vx VLO VHI y YLO YHI [sum yes|no] [units box]` (LAMMPS): the
+            // streaming profile of a Lees–Edwards shear.
+            if a.len() < 9 || a[1] != "all" || a[3] != "vx" || a[6] != "y" {
+                return Err(unsupported(
+                    "velocity ramp form (only 'velocity all ramp vx VLO VHI y YLO YHI')",
+                ));
+            }
+            let (vlo, vhi, ylo, yhi) = (num(a[4])?, num(a[5])?, num(a[7])?, num(a[8])?);
+            if yhi <= ylo || !(yhi - ylo).is_finite() {
+                return Err(format!("velocity ramp: YHI ({yhi}) must exceed YLO ({ylo})"));
+            }
+            let mut sum = false;
+            let mut k = 9;
+            while k < a.len() {
+                match (a[k], a.get(k + 1).copied()) {
+                    ("sum", Some(v @ ("yes" | "no"))) => sum = v == "yes",
+                    ("units", Some("box")) => {}
+                    _ => return Err(unsupported(&format!("velocity ramp keyword {}", a[k]))),
+                }
+                k += 2;
+            }
+            let p = &mut self.world.p;
+            for i in 0..p.len() {
+                let s = ((p.x[i].y - ylo) / (yhi - ylo)).clamp(0.0, 1.0);
+                let v = vlo + s * (vhi - vlo);
+                p.v[i].x = if sum { p.v[i].x + v } else { v };
+            }
+            return Ok(());
+        }
         if a.len() < 6 || a[1] != "all" || a[2] != "set" {
             return Err(unsupported("velocity form (only 'velocity all set vx vy vz [units box]')"));
         }
@@ -843,6 +898,23 @@ impl Deck {
                 }
                 self.world.integrate = true;
                 FixKind::Nve
+            }
+            "deform" => {
+                // Lees–Edwards simple shear: `fix ID all deform N xy erate RATE remap v`.
+                if a.len() != 10 || a[5] != "xy" || a[6] != "erate" || a[8] != "remap" || a[9] != "v" {
+                    return Err(unsupported("fix deform form (only 'deform N xy erate RATE remap v')"));
+                }
+                int(a[4])?;
+                let rate = num(a[7])?;
+                if !rate.is_finite() {
+                    return Err(format!("fix deform: shear rate must be finite, got {}", a[7]));
+                }
+                if !(self.periodic[0] && self.periodic[1]) {
+                    return Err("fix deform xy (Lees–Edwards shear) needs periodic x and y boundaries".into());
+                }
+                let d = self.world.domain.as_mut().ok_or("fix deform before the simulation box")?;
+                d.le_vjump = rate * (d.hi.y - d.lo.y);
+                FixKind::Deform
             }
             "multicontact/halfspace" => {
                 if a.len() != 6 || a[4] != "geometric_prefactor" {
@@ -1052,6 +1124,11 @@ impl Deck {
                 }
             }
             FixKind::MultiContact => self.mc_gamma = None,
+            FixKind::Deform => {
+                if let Some(d) = self.world.domain.as_mut() {
+                    d.le_vjump = 0.0;
+                }
+            }
             FixKind::MeshSurface(_) => return Err(unsupported("unfix of a mesh/surface fix")),
         }
         Ok(())

@@ -30,13 +30,39 @@ pub struct Domain {
     pub lo: Vec3,
     pub hi: Vec3,
     pub periodic: [bool; 3],
+    /// Lees–Edwards shear (x sheared along y): x offset of the image above the box (accumulated
+    /// strain × L_y, kept in [0, L_x)) and its x velocity jump γ̇ L_y. Both zero without shear.
+    pub le_offset: f64,
+    pub le_vjump: f64,
 }
 
 impl Domain {
+    /// Box with no Lees–Edwards shear.
+    pub fn new(lo: Vec3, hi: Vec3, periodic: [bool; 3]) -> Self {
+        Domain { lo, hi, periodic, le_offset: 0.0, le_vjump: 0.0 }
+    }
+
     /// Shortest periodic image of a separation vector.
     #[inline]
     pub fn minimum_image(&self, d: &mut Vec3) {
-        for a in 0..3 {
+        self.minimum_image_k(d);
+    }
+
+    /// Shortest image of d = x_i − x_j; returns k, the number of box heights the image of j was
+    /// moved up along y. With Lees–Edwards that image also sits k·offset further in x and moves
+    /// k·γ̇L_y faster in x, so the caller adds k·le_vjump to v_j.x.
+    #[inline]
+    pub fn minimum_image_k(&self, d: &mut Vec3) -> f64 {
+        let mut k = 0.0;
+        if self.periodic[1] {
+            let l = self.hi.y - self.lo.y;
+            if d.y.abs() > 0.5 * l {
+                k = (d.y / l).round();
+                d.y -= k * l;
+                d.x -= k * self.le_offset;
+            }
+        }
+        for a in [0, 2] {
             if self.periodic[a] {
                 let l = self.hi[a] - self.lo[a];
                 if d[a].abs() > 0.5 * l {
@@ -44,6 +70,22 @@ impl Domain {
                 }
             }
         }
+        k
+    }
+
+    /// Advances the Lees–Edwards offset by the velocity jump over dt, kept in [0, L_x).
+    pub fn advance_shear(&mut self, dt: f64) {
+        if self.le_vjump != 0.0 {
+            let lx = self.hi.x - self.lo.x;
+            self.le_offset = (self.le_offset + self.le_vjump * dt).rem_euclid(lx);
+        }
+    }
+
+    /// Streaming velocity u_x = γ̇ (y − y_mid) of the Lees–Edwards shear (zero without shear).
+    #[inline]
+    pub fn streaming_vx(&self, y: f64) -> f64 {
+        let ly = self.hi.y - self.lo.y;
+        self.le_vjump / ly * (y - 0.5 * (self.lo.y + self.hi.y))
     }
 
     pub fn volume(&self) -> f64 {
@@ -150,6 +192,8 @@ struct Pair {
     rj_prev: f64,
     dri: f64,
     drj: f64,
+    /// Total contact force on i from j at the last evaluation (zero when apart): stress compute.
+    force: Vec3,
 }
 
 /// A particle close to a wall element (plane, or one triangle of a mesh) with its history.
@@ -252,6 +296,8 @@ pub struct World {
     wc_old: Vec<WallContact>,
     x_build: Vec<Vec3>,
     need_build: bool,
+    /// Lees–Edwards offset at the last neighbour build.
+    le_offset_build: f64,
     mc_types: Vec<McType>,
     // multi-contact scratch (kept between steps: no allocation in the loop)
     slot_start: Vec<u32>,
@@ -353,6 +399,9 @@ impl World {
         if self.integrate {
             self.initial_integrate();
         }
+        if let Some(d) = self.domain.as_mut() {
+            d.advance_shear(dt);
+        }
         for m in &mut self.meshes {
             if m.velocity != Vec3::zeros() {
                 let d = m.velocity * dt;
@@ -424,7 +473,17 @@ impl World {
 
     /// Rebuilds the neighbour list when a particle moved more than skin/2 (or on request).
     fn neighbor_check(&mut self) -> Result<(), StepError> {
-        let half = 0.5 * self.skin;
+        // Pairs across the sheared boundary also move apart by the change of the Lees–Edwards
+        // offset since the build; it eats into the skin like a displacement of both particles.
+        let lx_le = self.domain.map_or(1.0, |d| d.hi.x - d.lo.x);
+        let doff = self.domain.map_or(0.0, |d| {
+            let o = (d.le_offset - self.le_offset_build).rem_euclid(lx_le);
+            o.min(lx_le - o)
+        });
+        let half = 0.5 * (self.skin - doff);
+        if half <= 0.0 {
+            self.need_build = true;
+        }
         if !self.need_build {
             let lim = half * half;
             let moved = self.p.x.iter().zip(&self.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim);
@@ -435,20 +494,31 @@ impl World {
         self.need_build = false;
         self.builds += 1;
         let domain = self.domain.expect("domain checked in setup");
-        // Periodic wrap and lost-particle check happen at rebuilds, as in LAMMPS.
+        // Periodic wrap and lost-particle check happen at rebuilds, as in LAMMPS. y first: a
+        // Lees–Edwards crossing shifts x, which is then wrapped too.
         for i in 0..self.p.len() {
-            for a in 0..3 {
+            for a in [1, 0, 2] {
                 let (lo, hi) = (domain.lo[a], domain.hi[a]);
-                let x = &mut self.p.x[i][a];
+                let xi = &mut self.p.x[i];
+                let x = &mut xi[a];
                 if domain.periodic[a] {
                     let l = hi - lo;
+                    let mut crossed = 0.0;
                     while *x >= hi {
                         *x -= l;
                         self.p.image[i][a] += 1;
+                        crossed -= 1.0;
                     }
                     while *x < lo {
                         *x += l;
                         self.p.image[i][a] -= 1;
+                        crossed += 1.0;
+                    }
+                    if a == 1 && crossed != 0.0 {
+                        // Leaving through the top of a sheared box: back in at the bottom,
+                        // shifted and slowed by the image's offset and velocity jump.
+                        xi.x += crossed * domain.le_offset;
+                        self.p.v[i].x += crossed * domain.le_vjump;
                     }
                 } else if !(*x >= lo && *x <= hi) {
                     return Err(StepError {
@@ -488,11 +558,13 @@ impl World {
                     rj_prev: 0.0,
                     dri: 0.0,
                     drj: 0.0,
+                    force: Vec3::zeros(),
                 },
             });
         }
         self.x_build.clear();
         self.x_build.extend_from_slice(&self.p.x);
+        self.le_offset_build = domain.le_offset;
         Ok(())
     }
 
@@ -890,6 +962,35 @@ impl World {
     }
 
     /// Number of touching contacts: particle pairs and particle–wall.
+    /// Eq. 4 stress tensor (compression positive), row-major, as (contact, kinetic) parts:
+    /// contact Σ_pairs r_ij ⊗ F_ij / V (= Σ_i Σ_j ½ r_ij F_ij / V), kinetic Σ m v'⊗v' / V with v'
+    /// the velocity about the Lees–Edwards streaming profile u_x = γ̇ (y − y_mid).
+    pub fn stress_parts(&self) -> ([[f64; 3]; 3], [[f64; 3]; 3]) {
+        let mut sc = [[0.0; 3]; 3];
+        let mut sk = [[0.0; 3]; 3];
+        let Some(domain) = self.domain else { return (sc, sk) };
+        let vol = domain.volume();
+        for pr in &self.pairs {
+            if pr.force == Vec3::zeros() {
+                continue;
+            }
+            let mut d = self.p.x[pr.i as usize] - self.p.x[pr.j as usize];
+            domain.minimum_image(&mut d);
+            add_outer(&mut sc, &d, &(pr.force / vol));
+        }
+        for i in 0..self.p.len() {
+            let mut v = self.p.v[i];
+            v.x -= domain.streaming_vx(self.p.x[i].y);
+            add_outer(&mut sk, &v, &(v * (self.p.mass[i] / vol)));
+        }
+        (sc, sk)
+    }
+
+    /// Particle–particle contacts carrying a force at the last force pass (set-up pass included).
+    pub fn pair_contacts(&self) -> usize {
+        self.pairs.iter().filter(|p| p.force != Vec3::zeros()).count()
+    }
+
     pub fn contact_counts(&self) -> (usize, usize) {
         let pp = self.pairs.iter().filter(|p| p.fn_prev > 0.0).count();
         let pw = self.wc.iter().filter(|c| c.fn_prev > 0.0).count();
@@ -961,10 +1062,12 @@ impl PairCtx<'_> {
         let p = self.p;
         let (i, j) = (pr.i as usize, pr.j as usize);
         let mut d = p.x[i] - p.x[j];
-        self.domain.minimum_image(&mut d);
+        let kimg = self.domain.minimum_image_k(&mut d);
         let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
         let radsum = ri + rj;
         if d.norm_squared() >= radsum * radsum {
+            // The force is output, not history: the set-up pass records it too.
+            pr.force = Vec3::zeros();
             if self.update {
                 pr.shear = Vec3::zeros();
                 pr.fn_prev = 0.0;
@@ -974,8 +1077,10 @@ impl PairCtx<'_> {
             return Ok(None);
         }
         let bi = Body { x: p.x[i], v: p.v[i], omega: p.omega[i], radius: p.radius[i], mass: p.mass[i] };
-        let mut bj =
-            Body { x: p.x[i] - d, v: p.v[j], omega: p.omega[j], radius: p.radius[j], mass: p.mass[j] };
+        // The image of j across a sheared boundary carries the Lees–Edwards velocity jump.
+        let mut vj = p.v[j];
+        vj.x += kimg * self.domain.le_vjump;
+        let mut bj = Body { x: p.x[i] - d, v: vj, omega: p.omega[j], radius: p.radius[j], mass: p.mass[j] };
         let mut dri = pr.dri;
         let mut ri_stored = ri;
         if self.liggghts_radii && pr.dri != 0.0 {
@@ -997,6 +1102,7 @@ impl PairCtx<'_> {
             Some(cf) => (Some((cf.force_i, cf.torque_i, cf.torque_j)), cf.force_i.dot(&cf.en).abs()),
             None => (None, 0.0),
         };
+        pr.force = out.map_or(Vec3::zeros(), |o| o.0);
         if self.update {
             pr.shear = shear;
             pr.fn_prev = fnorm;
@@ -1004,6 +1110,15 @@ impl PairCtx<'_> {
             pr.rj_prev = rj;
         }
         Ok(out)
+    }
+}
+
+/// s += u ⊗ w.
+fn add_outer(s: &mut [[f64; 3]; 3], u: &Vec3, w: &Vec3) {
+    for (row, ua) in s.iter_mut().zip(u.iter()) {
+        for (sab, wb) in row.iter_mut().zip(w.iter()) {
+            *sab += ua * wb;
+        }
     }
 }
 

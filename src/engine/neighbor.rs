@@ -49,6 +49,7 @@ impl CellList {
             self.ncell[a] = (self.ncell[a] / 2).max(1);
         }
         let [nx, ny, nz] = self.ncell;
+        let le = domain.le_vjump != 0.0 || domain.le_offset != 0.0;
         let ncells = nx * ny * nz;
         self.head.clear();
         self.head.resize(ncells, NONE);
@@ -91,11 +92,18 @@ impl CellList {
                         else {
                             continue;
                         };
-                        let o = ((oz * ny + oy) * nx + ox) as u32;
-                        // Fewer than three cells along a periodic axis: the stencil wraps onto
-                        // itself; visit each cell once.
-                        if !self.stencil.contains(&o) {
-                            self.stencil.push(o);
+                        // Across the y boundary of a Lees–Edwards box the neighbouring row is
+                        // shifted in x by the offset: take the whole row (simple and correct).
+                        let yw = cy as i64 + dy;
+                        let sheared = le && (yw < 0 || yw >= ny as i64);
+                        let xs = if sheared { 0..nx } else { ox..ox + 1 };
+                        for ox in xs {
+                            let o = ((oz * ny + oy) * nx + ox) as u32;
+                            // Fewer than three cells along a periodic axis: the stencil wraps
+                            // onto itself; visit each cell once.
+                            if !self.stencil.contains(&o) {
+                                self.stencil.push(o);
+                            }
                         }
                     }
                 }
