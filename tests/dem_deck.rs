@@ -67,3 +67,50 @@ fn bad_material_value_is_named() {
     let (ok, out) = run_deck(&text, &[]);
     assert!(!ok && out.contains("poisson_ratio") && out.contains("0.7"), "{out}");
 }
+
+#[test]
+fn include_if_and_immediate_expressions() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("part.inc"), "variable from_include equal 2*${half}\n").unwrap();
+    let deck = format!(
+        "variable half equal 0.5\ninclude {}/part.inc\n\
+         if \"${{from_include}} == 1\" then \"print 'took then $(v_from_include*3)'\" else \"print took-else\"\n\
+         if \"${{from_include}} > 5\" then \"print wrong\" elif \"1 < 2\" \"print took-elif\"\n{BASE}run 1\n",
+        dir.path().display()
+    );
+    let (ok, out) = run_deck(&deck, &[]);
+    assert!(ok, "{out}");
+    assert!(out.contains("took then 3"), "{out}");
+    assert!(out.contains("took-elif") && !out.contains("wrong") && !out.contains("took-else"), "{out}");
+    let (ok, out) = run_deck("include /nonexistent/part.inc\n", &[]);
+    assert!(!ok && out.contains("include: cannot read /nonexistent/part.inc"), "{out}");
+    let (ok, out) = run_deck("if \"1 == 1\" \"print x\"\n", &[]);
+    assert!(!ok && out.contains("expected 'then'"), "{out}");
+}
+
+#[test]
+fn die_decks_of_the_plugin_run_in_the_engine() {
+    // The single-particle die deck (include, if, $(...), rotated mesh, wall model settings) runs
+    // unmodified with Hertz and its plate force grows with the plate travel.
+    let decks = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs");
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+        .current_dir(dir.path())
+        .arg("run")
+        .arg(decks.join("single_particle_plates.in"))
+        .args(["-var", "law", "1", "-var", "dir"])
+        .arg(&decks)
+        .args(["-var", "out", "f.txt", "-log", "none"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = mcdem::outputs::read_ave_time(&dir.path().join("f.txt")).unwrap();
+    assert_eq!(rows.len(), 30);
+    let fz: Vec<f64> = rows.iter().map(|r| r[2]).collect();
+    assert!(fz.windows(2).all(|w| w[1] > w[0]) && fz[0] > 0.0, "{fz:?}");
+    // Hertz closed form: the plate travel (column 1, averaged over the output window like the
+    // force) is shared by the top and bottom contacts of the centred sphere, R = r = 1 mm.
+    let e_star = 1.0 / ((1.0 - 0.25) / 23.3e3 + (1.0 - 0.25) / 5e7);
+    let expected = 4.0 / 3.0 * e_star * 1e-3f64.sqrt() * (rows[29][1] / 2.0).powf(1.5);
+    assert!((fz[29] - expected).abs() < 2e-3 * expected, "{} vs {expected}", fz[29]);
+}

@@ -296,7 +296,29 @@ impl Deck {
         let b: Vec<char> = line.chars().collect();
         let mut i = 0;
         while i < b.len() {
-            if b[i] == '$' && i + 1 < b.len() {
+            if b[i] == '$' && i + 1 < b.len() && b[i + 1] == '(' {
+                // `$(expression)`: evaluated immediately (LAMMPS), printed with enough digits to
+                // give back the same double.
+                let mut depth = 0usize;
+                let mut end = None;
+                for (k, &c) in b.iter().enumerate().skip(i + 1) {
+                    match c {
+                        '(' => depth += 1,
+                        ')' => {
+                            depth -= 1;
+                            if depth == 0 {
+                                end = Some(k);
+                                break;
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                let end = end.ok_or("missing ')' after '$('")?;
+                let expr: String = b[i + 2..end].iter().collect();
+                out.push_str(&format::g(self.eval_formula(&expr, 0)?, 17));
+                i = end + 1;
+            } else if b[i] == '$' && i + 1 < b.len() {
                 let (name, next) = if b[i + 1] == '{' {
                     let end = b[i + 2..].iter().position(|&c| c == '}').ok_or("missing '}' after '${'")?;
                     (b[i + 2..i + 2 + end].iter().collect::<String>(), i + 3 + end)
@@ -525,6 +547,19 @@ impl Deck {
                             k += 2
                         }
                         "check" => k += 2,
+                        "contact_distance_factor" => {
+                            // LIGGGHTS widens the neighbour search for contacts that may appear
+                            // through multi-contact radius growth; the engine's detection reach is
+                            // the same knob (never below what the contact law needs, see pair_style).
+                            let f = num(a.get(k + 1).ok_or("neigh_modify: missing value")?)?;
+                            if !(f.is_finite() && f >= 1.0) {
+                                return Err(format!(
+                                    "neigh_modify contact_distance_factor {f}: must be >= 1"
+                                ));
+                            }
+                            self.world.mc_range = f;
+                            k += 2
+                        }
                         other => return Err(unsupported(&format!("neigh_modify keyword {other}"))),
                     }
                 }
@@ -601,6 +636,14 @@ impl Deck {
                 self.dumps.retain(|d| d.name != a[1]);
             }
             "variable" => self.variable(&a)?,
+            "include" => {
+                need(2)?;
+                let path = self.input_path(a[1]);
+                let text = std::fs::read_to_string(&path)
+                    .map_err(|e| format!("include: cannot read {}: {e}", path.display()))?;
+                self.execute(&text, &path)?;
+            }
+            "if" => self.if_command(&a)?,
             "print" => {
                 let text = a[1..].join(" ");
                 self.say(&text);
@@ -827,6 +870,8 @@ impl Deck {
                 ("surface", Some("default")) => m.surface_mc = false,
                 ("surface", Some("multicontact")) => m.surface_mc = true,
                 ("mprTest", Some(x)) => m.mpr_test = x.parse()?,
+                // LIGGGHTS' default for hertz; the core always applies tangential damping.
+                ("tangential_damping", Some("on")) => {}
                 _ => break,
             }
             k += 2;
@@ -975,6 +1020,17 @@ impl Deck {
                     ops.push(("move", v));
                     k += 4;
                 }
+                "rotate" => {
+                    if a.get(k + 1) != Some(&"axis") || a.get(k + 5) != Some(&"angle") {
+                        return Err("mesh rotate: expected 'rotate axis X Y Z angle DEGREES'".into());
+                    }
+                    let v = [2, 3, 4, 6]
+                        .iter()
+                        .map(|d| num(a.get(k + d).ok_or("mesh rotate: 4 values")?))
+                        .collect::<R<_>>()?;
+                    ops.push(("rotate", v));
+                    k += 7;
+                }
                 "scale" => {
                     ops.push(("scale", vec![num(a.get(k + 1).ok_or("mesh scale: value")?)?]));
                     k += 2;
@@ -994,6 +1050,7 @@ impl Deck {
         for (op, v) in ops {
             match op {
                 "move" => m.translate(&Vec3::new(v[0], v[1], v[2])),
+                "rotate" => m.rotate(&Vec3::new(v[0], v[1], v[2]), v[3])?,
                 _ => m.scale(v[0]),
             }
         }
@@ -1044,8 +1101,20 @@ impl Deck {
             }
             _ => return Err("wall/gran: expected 'primitive' or 'mesh'".into()),
         };
-        if k != a.len() {
-            return Err(unsupported(&format!("wall/gran keyword {}", a[k])));
+        // Model settings may follow the geometry (LIGGGHTS accepts them at the end of the line);
+        // the wall uses the pair style's model, so only settings that agree with it are accepted.
+        while k < a.len() {
+            match (a[k], a.get(k + 1).copied()) {
+                ("tangential_damping", Some("on")) => {}
+                ("mprTest", Some(x)) => {
+                    let t: MprTest = x.parse()?;
+                    if self.pair.as_ref().is_some_and(|g| g.mpr_test != t) {
+                        return Err(format!("wall/gran mprTest {x} differs from the pair style's"));
+                    }
+                }
+                _ => return Err(unsupported(&format!("wall/gran keyword {}", a[k]))),
+            }
+            k += 2;
         }
         self.world.walls.push(WallFix { name: a[1].into(), geom });
         Ok(FixKind::Wall(self.world.walls.len() - 1))
@@ -1192,6 +1261,45 @@ impl Deck {
         Ok(())
     }
 
+    /// `if "cond" then "cmd" ... [elif "cond" "cmd" ...]... [else "cmd" ...]` (LAMMPS): the first
+    /// true branch's commands run in order, each as if it were a deck line.
+    fn if_command(&mut self, a: &[&str]) -> R<()> {
+        let mut k = 1;
+        let mut cond = a.get(k).ok_or("if: expected a condition")?.to_string();
+        k += 1;
+        if a.get(k) != Some(&"then") {
+            return Err("if: expected 'then' after the condition".into());
+        }
+        k += 1;
+        loop {
+            let start = k;
+            while k < a.len() && a[k] != "elif" && a[k] != "else" {
+                k += 1;
+            }
+            let commands: Vec<String> = a[start..k].iter().map(|c| c.to_string()).collect();
+            if self.eval_formula(&cond, 0)? != 0.0 {
+                for c in commands {
+                    self.command(&c)?;
+                }
+                return Ok(());
+            }
+            match a.get(k) {
+                None => return Ok(()),
+                Some(&"elif") => {
+                    cond = a.get(k + 1).ok_or("if: expected a condition after 'elif'")?.to_string();
+                    k += 2;
+                }
+                Some(_) => {
+                    // else: everything after it runs.
+                    for c in &a[k + 1..] {
+                        self.command(c)?;
+                    }
+                    return Ok(());
+                }
+            }
+        }
+    }
+
     fn variable(&mut self, a: &[&str]) -> R<()> {
         if a.len() < 4 {
             return Err("variable: expected 'variable NAME style args'".into());
@@ -1272,7 +1380,8 @@ impl Deck {
         self.world.set_materials(mats, &rest, &fric)?;
         self.world.closure = Some(closure);
         self.world.liggghts_radii = pair.surface_mc;
-        self.world.mc_range = if closure == Closure::MultiContact { 1.25 } else { 1.0 };
+        self.world.mc_range =
+            self.world.mc_range.max(if closure == Closure::MultiContact { 1.25 } else { 1.0 });
         Ok(())
     }
 

@@ -195,6 +195,27 @@ impl Mesh {
         self.bb_hi += d;
     }
 
+    /// Rotate about an axis through the origin by `degrees` (the `rotate axis X Y Z angle A`
+    /// keyword of `fix mesh/surface`). The degree-to-radian factor is LIGGGHTS' own
+    /// (π written as 3.14159265), so both engines place the mesh at the same doubles.
+    #[allow(clippy::approx_constant)] // LIGGGHTS' truncated π, on purpose (see above)
+    pub fn rotate(&mut self, axis: &Vec3, degrees: f64) -> Result<(), String> {
+        if axis.norm() < 1e-5 {
+            return Err("mesh rotate: the axis must not be zero".into());
+        }
+        let rot = nalgebra::Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(*axis),
+            degrees * 3.14159265 / 180.0,
+        );
+        for t in &mut self.tris {
+            for v in &mut t.v {
+                *v = rot * *v;
+            }
+        }
+        self.update_bbox();
+        Ok(())
+    }
+
     /// Scale about the origin (the `scale` keyword of `fix mesh/surface`).
     pub fn scale(&mut self, s: f64) {
         for t in &mut self.tris {
