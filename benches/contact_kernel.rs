@@ -10,17 +10,9 @@ use mcdem::physics::material::{Material, PairCoeffs};
 use mcdem::physics::pair::{particle_particle, Body};
 use mcdem::physics::Vec3;
 
-/// `n` contacts spread over the sphere (Fibonacci lattice), each loaded.
+/// `n` loaded contacts spread over the sphere (the hard cases' many-contact particle).
 fn contacts(n: usize, r: f64) -> Vec<ContactLoad> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let rho = (1.0 - z * z).sqrt();
-            let phi = golden * i as f64;
-            ContactLoad { point: Vec3::new(rho * phi.cos(), rho * phi.sin(), z) * 0.95 * r, force: 1e-3 }
-        })
-        .collect()
+    mcdem::validate::hard_cases::spread_contacts(n, r, 1e-3)
 }
 
 fn kernel(c: &mut Criterion) {

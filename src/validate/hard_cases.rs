@@ -47,17 +47,22 @@ fn finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-/// `n` loaded contacts spread evenly over the sphere (Fibonacci lattice).
-fn spread(n: usize, force: f64) -> Vec<ContactLoad> {
+/// `n` contacts, each carrying `force`, spread evenly over a sphere of radius `r` (Fibonacci
+/// lattice), at depth 0.95 r: the standard many-contact particle of the hard cases and benchmarks.
+pub fn spread_contacts(n: usize, r: f64, force: f64) -> Vec<ContactLoad> {
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
         .map(|i| {
             let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
             let rho = (1.0 - z * z).sqrt();
             let phi = golden * i as f64;
-            ContactLoad { point: Vec3::new(rho * phi.cos(), rho * phi.sin(), z) * 0.95 * R, force }
+            ContactLoad { point: Vec3::new(rho * phi.cos(), rho * phi.sin(), z) * 0.95 * r, force }
         })
         .collect()
+}
+
+fn spread(n: usize, force: f64) -> Vec<ContactLoad> {
+    spread_contacts(n, R, force)
 }
 
 fn antipodal() -> Outcome {
