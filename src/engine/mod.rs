@@ -214,6 +214,22 @@ struct WallContact {
 }
 
 impl WallContact {
+    /// A contact seen for the first time: no tangential history, no previous force or surface point.
+    fn fresh(p: usize, wall: usize, mesh: usize, tri: usize, point: Vec3, velocity: Vec3) -> Self {
+        WallContact {
+            p: p as u32,
+            wall: wall as u32,
+            mesh: mesh as u32,
+            tri: tri as u32,
+            point,
+            velocity,
+            shear: Vec3::zeros(),
+            fn_prev: 0.0,
+            rel_prev: Vec3::zeros(),
+            dr: 0.0,
+        }
+    }
+
     #[inline]
     fn key(&self) -> (u32, u32, u32, u32) {
         (self.p, self.wall, self.mesh, self.tri)
@@ -589,18 +605,7 @@ impl World {
                                 &mut self.wc,
                                 &self.wc_old,
                                 &mut k,
-                                WallContact {
-                                    p: i as u32,
-                                    wall: w as u32,
-                                    mesh: 0,
-                                    tri: 0,
-                                    point,
-                                    velocity: Vec3::zeros(),
-                                    shear: Vec3::zeros(),
-                                    fn_prev: 0.0,
-                                    rel_prev: Vec3::zeros(),
-                                    dr: 0.0,
-                                },
+                                WallContact::fresh(i, w, 0, 0, point, Vec3::zeros()),
                             );
                         }
                     }
@@ -617,18 +622,7 @@ impl World {
                                             &mut self.wc,
                                             &self.wc_old,
                                             &mut k,
-                                            WallContact {
-                                                p: i as u32,
-                                                wall: w as u32,
-                                                mesh: mi as u32,
-                                                tri: t as u32,
-                                                point: q,
-                                                velocity: m.velocity,
-                                                shear: Vec3::zeros(),
-                                                fn_prev: 0.0,
-                                                rel_prev: Vec3::zeros(),
-                                                dr: 0.0,
-                                            },
+                                            WallContact::fresh(i, w, mi, t, q, m.velocity),
                                         );
                                     }
                                 }
