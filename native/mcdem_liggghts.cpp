@@ -229,7 +229,9 @@ public:
     void surfacesIntersect(SurfacesIntersectData &sidata, ForceData &i_forces, ForceData &j_forces) {
         if (sidata.contact_flags) *sidata.contact_flags |= CONTACT_NORMAL_MODEL;
         const int it = sidata.itype, jt = sidata.jtype;
-        const double radi = sidata.radi, radj = sidata.radj;
+        const double radj = sidata.radj;
+        const double radi = modified_radius_i(sidata);
+        if (!sidata.is_wall) use_modified_lever_arms(sidata, radi);
         const double reff = sidata.is_wall ? radi : radi * radj / (radi + radj);
         // Radii shrunk by the multi-contact correction can leave a geometric touch with no
         // effective overlap (or no positive effective radius): that contact carries no force.
@@ -279,10 +281,36 @@ public:
             for (int k = 0; k < 3; k++) rec[k] = scdata.delta[k] * s;
             rec[3] = 0.0;
         } else {
-            rec[0] = scdata.radi;
+            rec[0] = modified_radius_i(scdata);
             rec[1] = scdata.radj;
             rec[2] = 0.0;
         }
+    }
+
+    // i's multi-contact-modified radius at this contact. LIGGGHTS's pair loop grows radj and the
+    // radius sum but leaves radi at the original radius (its walls grow radi). SPEC §2 uses the
+    // modified radius of both partners for R_eff, the lever arms and the contact point, so that a
+    // pair does not depend on which partner the neighbour list names first.
+    static double modified_radius_i(const SurfacesCloseData &d) { return d.is_wall ? d.radi : d.radsum - d.radj; }
+
+    // The surface model computed the relative surface velocity and lever arms with radi; redo that
+    // kinematics with the modified radius (same formulas, LIGGGHTS's sign conventions).
+    static void use_modified_lever_arms(SurfacesIntersectData &d, double radi) {
+        const double cri = radi - 0.5 * d.deltan;
+        const double crj = d.radj - 0.5 * d.deltan;
+        double wr[3], vt[3];
+        for (int k = 0; k < 3; k++) {
+            wr[k] = (cri * d.omega_i[k] + crj * d.omega_j[k]) * d.rinv;
+            vt[k] = (d.v_i[k] - d.v_j[k]) - d.vn * d.en[k];
+        }
+        d.cri = cri;
+        d.crj = crj;
+        d.wr1 = wr[0];
+        d.wr2 = wr[1];
+        d.wr3 = wr[2];
+        d.vtr1 = vt[0] - (d.delta[2] * wr[1] - d.delta[1] * wr[2]);
+        d.vtr2 = vt[1] - (d.delta[0] * wr[2] - d.delta[2] * wr[0]);
+        d.vtr3 = vt[2] - (d.delta[1] * wr[0] - d.delta[0] * wr[1]);
     }
 
 private:

@@ -1430,6 +1430,22 @@ impl Deck {
 
     fn end_of_step_outputs(&mut self, last: bool) -> R<Option<String>> {
         let step = self.world.step;
+        self.sample_ave_times()?;
+        for d in &mut self.dumps {
+            if step % d.every == 0 && d.last != Some(step) {
+                d.write(&self.world)?;
+            }
+        }
+        let thermo_due = last || (self.thermo_every > 0 && step % self.thermo_every == 0);
+        if thermo_due {
+            return Ok(Some(self.thermo_line()?));
+        }
+        Ok(None)
+    }
+
+    /// Every `fix ave/time` due at the current step samples (and writes, at the end of its window).
+    fn sample_ave_times(&mut self) -> R<()> {
+        let step = self.world.step;
         for k in 0..self.aves.len() {
             let Some(at) = self.aves[k].as_ref() else { continue };
             if at.nvalid != step {
@@ -1446,16 +1462,7 @@ impl Deck {
             }
             self.scratch = vals;
         }
-        for d in &mut self.dumps {
-            if step % d.every == 0 && d.last != Some(step) {
-                d.write(&self.world)?;
-            }
-        }
-        let thermo_due = last || (self.thermo_every > 0 && step % self.thermo_every == 0);
-        if thermo_due {
-            return Ok(Some(self.thermo_line()?));
-        }
-        Ok(None)
+        Ok(())
     }
 
     fn run(&mut self, a: &[&str]) -> R<()> {
@@ -1481,6 +1488,8 @@ impl Deck {
         for wmsg in warnings {
             self.warn(&wmsg);
         }
+        // As in LIGGGHTS, the setup of a run is an end of step for the averaging fixes.
+        self.sample_ave_times()?;
         self.say("Setting up run ...");
         let header = self.thermo_header();
         self.say(&header);

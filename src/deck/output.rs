@@ -193,6 +193,11 @@ impl AveTime {
     /// LAMMPS `nextvalid`: the first step of the next averaging window.
     pub fn next_valid(&self, step: u64) -> u64 {
         let mut nvalid = (step / self.nfreq) * self.nfreq + self.nfreq;
+        if nvalid - self.nfreq == step && self.nrepeat == 1 {
+            // No averaging window to fill: a step that is already a multiple of Nfreq is written
+            // at once, at the setup of the run (LAMMPS writes step 0 of `ave/time 1 1 1`).
+            return step;
+        }
         let back = (self.nrepeat - 1) * self.nevery;
         nvalid = nvalid.saturating_sub(back);
         if nvalid < step {
