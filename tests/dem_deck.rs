@@ -62,6 +62,22 @@ fn var_on_the_command_line_overrides_index_variables() {
 }
 
 #[test]
+fn nested_loops_with_label_next_and_jump() {
+    // LAMMPS semantics: an exhausted `next` deletes the variable and skips the following jump,
+    // so the inner loop restarts for every outer value.
+    let text = "variable i loop 2\nlabel outer\nvariable j loop 3\nlabel inner\n\
+                print \"cell $(10*v_i+v_j)\"\nnext j\njump SELF inner\nnext i\njump SELF outer\n\
+                print done\n";
+    let (ok, out) = run_deck(&format!("{BASE}{text}"), &[]);
+    assert!(ok, "{out}");
+    let cells: Vec<&str> = out.lines().filter(|l| l.starts_with("cell")).collect();
+    assert_eq!(cells, ["cell 11", "cell 12", "cell 13", "cell 21", "cell 22", "cell 23"], "{out}");
+    assert!(out.contains("done"));
+    let (ok, out) = run_deck(&format!("{BASE}jump SELF nowhere\n"), &[]);
+    assert!(!ok && out.contains("no label nowhere"), "{out}");
+}
+
+#[test]
 fn bad_material_value_is_named() {
     let text = BASE.replace("poissonsRatio peratomtype 0.3", "poissonsRatio peratomtype 0.7") + "run 1\n";
     let (ok, out) = run_deck(&text, &[]);

@@ -2,9 +2,11 @@
 //! `liggghts_inputs/`, and the piston force of the hydrogel example (NRMSE per stroke).
 //! Skipped with a message when `liggghts` is not installed (tests/run.sh installs it).
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+mod common;
+use common::frames;
 
 const HYDROGEL: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
 
@@ -100,14 +102,15 @@ fn particle_between_moving_plates_matches_liggghts_step_by_step() {
     let (o, t) = run_both(&deck, &[&meshes], &[]);
     let f = "post/plates.dump";
     assert_dumps_agree(&o.path().join(f), &t.path().join(f), 1e-6);
-    // The mesh/surface/stress force written by fix ave/time: same file, line by line.
-    let a = std::fs::read_to_string(o.path().join("post/plates_force.txt")).unwrap();
-    let b = std::fs::read_to_string(t.path().join("post/plates_force.txt")).unwrap();
-    let (ra, rb) = (read_ave(&a), read_ave(&b));
-    assert_eq!(ra.len(), rb.len());
-    let scale = rb.values().map(|v| v[2].abs()).fold(0.0, f64::max);
-    for (s, v) in &rb {
-        assert!((ra[s][2] - v[2]).abs() <= 1e-5 * scale, "step {s}: {} vs {}", ra[s][2], v[2]);
+    // The mesh/surface/stress force written by fix ave/time (read with polars): same rows.
+    let read = |d: &Path| frames::ave_time(&d.join("post/plates_force.txt"));
+    let (a, b) = (read(o.path()), read(t.path()));
+    assert_eq!(frames::values(&a, "TimeStep"), frames::values(&b, "TimeStep"));
+    let name = b.get_column_names()[3].to_string();
+    let (fa, fb) = (frames::values(&a, &name), frames::values(&b, &name));
+    let scale = fb.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    for (k, (x, y)) in fa.iter().zip(&fb).enumerate() {
+        assert!((x - y).abs() <= 1e-5 * scale, "row {k}: {x} vs {y}");
     }
 }
 
@@ -148,25 +151,19 @@ fn particle_between_plates_standard_mc_matches_liggghts_within_a_run() {
     }
 }
 
-fn read_ave(text: &str) -> BTreeMap<u64, Vec<f64>> {
-    mcdem::outputs::parse_ave_time(text, "ave/time")
-        .unwrap()
-        .into_iter()
-        .map(|r| (r[0] as u64, r[1..].to_vec()))
-        .collect()
-}
-
-/// NRMSE of the piston force (column 3 of the ave/time file) per stroke of `stroke_steps`.
-fn nrmse_per_stroke(ours: &str, theirs: &str, stroke_steps: u64) -> Vec<f64> {
-    let (a, b) = (read_ave(ours), read_ave(theirs));
-    let strokes = b.keys().max().copied().unwrap_or(0).div_ceil(stroke_steps);
-    (0..strokes)
+/// NRMSE of the piston force (the third value of the ave/time file) per stroke of `stroke_steps`,
+/// both files read with polars and cut into strokes by their `TimeStep` column.
+fn nrmse_per_stroke(ours: &Path, theirs: &Path, stroke_steps: u64) -> Vec<f64> {
+    let (a, b) = (frames::ave_time(ours), frames::ave_time(theirs));
+    let force = b.get_column_names()[3].to_string();
+    let last = frames::values(&b, "TimeStep").into_iter().fold(0.0, f64::max) as u64;
+    (0..last.div_ceil(stroke_steps))
         .map(|k| {
-            let sel: Vec<u64> =
-                b.keys().copied().filter(|s| *s > k * stroke_steps && *s <= (k + 1) * stroke_steps).collect();
-            let ours: Vec<f64> = sel.iter().map(|s| a[s][2]).collect();
-            let theirs: Vec<f64> = sel.iter().map(|s| b[s][2]).collect();
-            mcdem::outputs::nrmse(&ours, &theirs)
+            let (lo, hi) = ((k * stroke_steps) as f64, ((k + 1) * stroke_steps) as f64);
+            let (sa, sb) =
+                (frames::rows_between(&a, "TimeStep", lo, hi), frames::rows_between(&b, "TimeStep", lo, hi));
+            assert_eq!(frames::values(&sa, "TimeStep"), frames::values(&sb, "TimeStep"), "stroke {k}: steps");
+            mcdem::outputs::nrmse(&frames::values(&sa, &force), &frames::values(&sb, &force))
         })
         .collect()
 }
@@ -196,9 +193,7 @@ fn hydrogel(deck: &str, ts: u64, out: &str, strokes: usize) {
     copy_dir(&Path::new(HYDROGEL).join("meshes"), &dir.path().join("meshes"));
     let (o, t) = run_both(&path, &[&dir.path().join("data"), &dir.path().join("meshes")], &[]);
     let f = format!("post/{out}");
-    let a = std::fs::read_to_string(o.path().join(&f)).unwrap();
-    let b = std::fs::read_to_string(t.path().join(&f)).unwrap();
-    let e = nrmse_per_stroke(&a, &b, ts);
+    let e = nrmse_per_stroke(&o.path().join(&f), &t.path().join(&f), ts);
     println!("{deck} ({ts} steps per stroke): NRMSE per stroke {e:?}");
     assert_eq!(e.len(), strokes);
     for (k, v) in e.iter().enumerate() {

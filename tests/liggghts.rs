@@ -250,40 +250,6 @@ fn mpr_test_signed_runs() {
     assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
 }
 
-#[test]
-fn two_mpi_ranks_give_the_one_rank_result() {
-    // The per-contact radius changes of particles owned by the other rank reach the pair loop
-    // through the ghost exchange. The single particle in the die crosses the sub-domain boundary.
-    let tmp = TempDir::new().unwrap();
-    let deck = decks().join("single_particle_plates.in");
-    for np in ["1", "2"] {
-        let out = std::process::Command::new("mpirun")
-            .current_dir(tmp.path())
-            .args(["--allow-run-as-root", "--oversubscribe", "-np", np])
-            .arg(env!("CARGO_BIN_EXE_mcdem-liggghts"))
-            .arg("-in")
-            .arg(&deck)
-            .args([
-                "-log",
-                &format!("np{np}.log"),
-                "-var",
-                "mpr",
-                "1e9",
-                "-var",
-                "dump",
-                &format!("np{np}.dump"),
-            ])
-            .args(["-var", "out", &format!("np{np}.txt"), "-var", "dir"])
-            .arg(decks())
-            .output()
-            .expect("mpirun (openmpi-bin)");
-        assert!(out.status.success(), "np {np}: {}", String::from_utf8_lossy(&out.stdout));
-    }
-    let (a, b) = (read_dump(&tmp.path().join("np1.dump")), read_dump(&tmp.path().join("np2.dump")));
-    let d = max_dump_difference(&a, &b);
-    assert!(d <= PRINT_PRECISION, "one vs two ranks: max relative difference {d:e}");
-}
-
 use mcdem::outputs::nrmse;
 
 #[test]

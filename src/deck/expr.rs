@@ -119,6 +119,13 @@ impl Parser<'_> {
                     return Err("division by zero in formula".into());
                 }
                 a /= b;
+            } else if self.eat("%") {
+                let b = self.unary()?;
+                if b == 0.0 {
+                    return Err("modulo by zero in formula".into());
+                }
+                // LAMMPS: fmod (the sign follows the dividend).
+                a %= b;
             } else {
                 return Ok(a);
             }
@@ -274,6 +281,8 @@ mod tests {
         assert_eq!(eval("2^3*v_a + f_m[3]", &R).unwrap(), 21.0);
         assert_eq!(eval("sqrt(4) > 1 && 1", &R).unwrap(), 1.0);
         assert!(eval("1/0", &R).is_err());
+        assert_eq!(eval("7%3 + (-7)%3", &R).unwrap(), 0.0);
+        assert!(eval("1%0", &R).is_err());
         assert!(eval("v_b", &R).is_err());
     }
 }

@@ -53,6 +53,11 @@ pub struct RunSummary {
 enum Var {
     Index(String),
     Equal(String),
+    /// `variable NAME loop N1 N2`: the current value, advanced by `next` up to `last`.
+    Loop {
+        value: i64,
+        last: i64,
+    },
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -109,6 +114,10 @@ struct Deck {
     summary: RunSummary,
     line_no: usize,
     scratch: Vec<f64>,
+    /// Label a `jump SELF LABEL` asked for: the running file continues after it.
+    pending_jump: Option<String>,
+    /// Set when `next` exhausts a variable: the following `jump` is skipped (ends the loop).
+    skip_jump: bool,
 }
 
 type R<T> = Result<T, String>;
@@ -217,6 +226,8 @@ impl Deck {
             summary: RunSummary::default(),
             line_no: 0,
             scratch: Vec::new(),
+            pending_jump: None,
+            skip_jump: false,
         })
     }
 
@@ -286,6 +297,19 @@ impl Deck {
                 continue;
             }
             self.command(&cmd).map_err(|e| format!("{fname}:{}: {e}", start + 1))?;
+            if let Some(label) = self.pending_jump.take() {
+                // LAMMPS rereads the file from its start up to the label (none: from the start).
+                k = if label.is_empty() {
+                    0
+                } else {
+                    let at = lines.iter().position(|l| {
+                        let w: Vec<&str> = strip_comment(l).split_whitespace().collect();
+                        w.len() == 2 && w[0] == "label" && w[1] == label
+                    });
+                    at.ok_or_else(|| format!("{fname}:{}: jump: no label {label} in this file", start + 1))?
+                        + 1
+                };
+            }
         }
         Ok(())
     }
@@ -328,6 +352,7 @@ impl Deck {
                 let v = match self.vars.get(&name) {
                     Some(Var::Index(s)) => s.clone(),
                     Some(Var::Equal(f)) => format::g(self.eval_formula(f, 0)?, 15),
+                    Some(Var::Loop { value, .. }) => value.to_string(),
                     None => return Err(format!("substitution for undefined variable {name}")),
                 };
                 out.push_str(&v);
@@ -354,6 +379,7 @@ impl Deck {
             return match self.vars.get(v) {
                 Some(Var::Equal(f)) => self.eval_formula(f, depth),
                 Some(Var::Index(s)) => num(s).map_err(|_| format!("variable {v} is not numeric")),
+                Some(Var::Loop { value, .. }) => Ok(*value as f64),
                 None => Err(format!("unknown variable {v}")),
             };
         }
@@ -636,6 +662,32 @@ impl Deck {
                 self.dumps.retain(|d| d.name != a[1]);
             }
             "variable" => self.variable(&a)?,
+            "label" => need(2)?,
+            "next" => {
+                need(2)?;
+                for v in &a[1..] {
+                    match self.vars.get_mut(*v) {
+                        Some(Var::Loop { value, last }) if *value < *last => *value += 1,
+                        Some(Var::Loop { .. }) | Some(Var::Index(_)) => {
+                            // Exhausted: deleted, and the jump that closes the loop is skipped.
+                            self.vars.remove(*v);
+                            self.skip_jump = true;
+                        }
+                        Some(Var::Equal(_)) => return Err(format!("next: variable {v} is not a loop")),
+                        None => return Err(format!("next: unknown variable {v}")),
+                    }
+                }
+            }
+            "jump" => {
+                need(2)?;
+                if a[1] != "SELF" {
+                    return Err(unsupported("jump to another file (use jump SELF LABEL)"));
+                }
+                if std::mem::take(&mut self.skip_jump) {
+                    return Ok(());
+                }
+                self.pending_jump = Some(a.get(2).map_or(String::new(), |l| l.to_string()));
+            }
             "include" => {
                 need(2)?;
                 let path = self.input_path(a[1]);
@@ -1315,6 +1367,22 @@ impl Deck {
             "equal" => {
                 let f = a[3..].join(" ");
                 self.vars.insert(name, Var::Equal(f));
+            }
+            "loop" => {
+                let (first, last) = match a.len() {
+                    4 => (1, int(a[3])?),
+                    5 if a[4] == "pad" => (1, int(a[3])?),
+                    5 | 6 => (int(a[3])?, int(a[4])?),
+                    _ => return Err("variable loop: expected N or N1 N2".into()),
+                };
+                if a.get(5).is_some_and(|w| *w != "pad") {
+                    return Err(unsupported(&format!("variable loop keyword {}", a[5])));
+                }
+                if first > last {
+                    return Err(format!("variable {name}: loop from {first} to {last} is empty"));
+                }
+                // LAMMPS: an existing loop variable is not redefined (the loop is running).
+                self.vars.entry(name).or_insert(Var::Loop { value: first, last });
             }
             other => return Err(unsupported(&format!("variable style {other}"))),
         }
