@@ -110,73 +110,6 @@ pub fn nrmse(model: &[f64], reference: &[f64]) -> f64 {
     mse.sqrt() / mean
 }
 
-/// The physical quantity a dump column belongs to: the components of a vector (`x y z`,
-/// `vx vy vz`, `fx fy fz`, `omegax …`) share one, every other column is its own.
-fn quantity(column: &str) -> &str {
-    match column {
-        "x" | "y" | "z" | "xu" | "yu" | "zu" => "position",
-        c if c.len() > 1 && c.ends_with(['x', 'y', 'z']) => &c[..c.len() - 1],
-        c => c,
-    }
-}
-
-/// Largest difference between two trajectories (dumps of the same deck by two engines), per
-/// physical quantity, relative to the largest magnitude that quantity reaches over the run.
-/// Frames are matched by step and atoms by the `id` column, so the engines may order atoms
-/// differently. A vector's components share one scale: a component that is zero by symmetry
-/// carries round-off noise that is no relative error of order one (for the same reason ω is
-/// measured against max|v| / max r when the dump has `v*` and `radius`).
-pub fn trajectory_difference(a: &[Frame], b: &[Frame]) -> Result<Vec<(String, f64)>, String> {
-    let first = b.first().ok_or("empty dump")?;
-    let id = first.column("id").ok_or("dump has no id column")?;
-    let cols: Vec<usize> = (0..first.columns.len()).filter(|&c| c != id).collect();
-    let mut names: Vec<&str> = Vec::new();
-    for &c in &cols {
-        let q = quantity(&first.columns[c]);
-        if !names.contains(&q) {
-            names.push(q);
-        }
-    }
-    let group = |c: usize| names.iter().position(|n| *n == quantity(&first.columns[c])).unwrap();
-    let mut scale = vec![0.0_f64; names.len()];
-    let mut worst = vec![0.0_f64; names.len()];
-    let by_step: std::collections::HashMap<u64, &Frame> = a.iter().map(|f| (f.step, f)).collect();
-    if a.len() != b.len() {
-        return Err(format!("{} frames against {}", a.len(), b.len()));
-    }
-    for fb in b {
-        let fa = by_step.get(&fb.step).ok_or_else(|| format!("step {} missing", fb.step))?;
-        if fa.columns != fb.columns || fa.rows.len() != fb.rows.len() {
-            return Err(format!("step {}: different columns or atom counts", fb.step));
-        }
-        let rows_a: std::collections::HashMap<i64, &Vec<f64>> =
-            fa.rows.iter().map(|r| (r[id] as i64, r)).collect();
-        for rb in &fb.rows {
-            let ra =
-                rows_a.get(&(rb[id] as i64)).ok_or_else(|| format!("step {}: atom {}", fb.step, rb[id]))?;
-            for &c in &cols {
-                let g = group(c);
-                scale[g] = scale[g].max(ra[c].abs()).max(rb[c].abs());
-                worst[g] = worst[g].max((ra[c] - rb[c]).abs());
-            }
-        }
-    }
-    // A particle that does not turn (by symmetry) has an angular velocity of round-off size only:
-    // measure ω against the rotation rate its translation would give, max|v| / max r.
-    let find = |n: &str| names.iter().position(|m| *m == n);
-    if let (Some(w), Some(v), Some(r)) = (find("omega"), find("v"), first.column("radius")) {
-        let rmax = b.iter().flat_map(|f| f.rows.iter().map(move |row| row[r])).fold(0.0, f64::max);
-        if rmax > 0.0 {
-            scale[w] = scale[w].max(scale[v] / rmax);
-        }
-    }
-    Ok(names
-        .iter()
-        .zip(worst.iter().zip(&scale))
-        .map(|(n, (w, s))| (n.to_string(), if *s > 0.0 { w / s } else { 0.0 }))
-        .collect())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -199,20 +132,6 @@ mod tests {
         assert_eq!(parse_dump(&bad, "d").unwrap_err(), "d:11: not a number in '2 x 2 '");
         let cols = DUMP.replace("2 0.25 2 ", "2 0.25");
         assert!(parse_dump(&cols, "d").unwrap_err().contains("2 values for 3 columns"));
-    }
-
-    #[test]
-    fn trajectory_difference_groups_vectors_and_matches_ids() {
-        let a = parse_dump(DUMP, "a").unwrap();
-        // Same frames with the atoms listed in the other order and one value changed.
-        let swapped = DUMP.replace("1 0.5 -1e-3 \n2 0.25 2 \n", "2 0.25 2 \n1 0.5 -1e-3 \n");
-        let mut b = parse_dump(&swapped, "b").unwrap();
-        assert_eq!(trajectory_difference(&a, &b).unwrap(), vec![("position".into(), 0.0), ("f".into(), 0.0)]);
-        b[0].rows[1][1] = 0.45;
-        let d = trajectory_difference(&a, &b).unwrap();
-        assert!((d[0].1 - 0.1).abs() < 1e-12, "{d:?}");
-        b.pop();
-        assert!(trajectory_difference(&a, &b).is_err());
     }
 
     #[test]

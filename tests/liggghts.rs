@@ -9,8 +9,7 @@
 //!
 //! (The `library.h` bindings are tested in `liggghts_library.rs`, a process of their own.)
 //!
-//! The dump reader is a small parser of our own (frames of named numeric columns): it needs no
-//! dataframe library, whose compile time on the CI machine would exceed the rest of the build.
+//! Dumps are compared with polars (tests/common/frames.rs).
 #![cfg(feature = "liggghts")]
 
 use std::path::{Path, PathBuf};
@@ -18,6 +17,9 @@ use std::process::Output;
 
 use assert_cmd::Command;
 use tempfile::TempDir;
+
+mod common;
+use common::frames;
 
 fn decks() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs")
@@ -59,13 +61,6 @@ fn read_ave_time(path: &Path) -> Vec<Vec<f64>> {
     mcdem::outputs::read_ave_time(path).unwrap()
 }
 
-/// Largest difference between two dumps over all quantities, each relative to the largest
-/// magnitude of its quantity over the run (`mcdem::outputs::trajectory_difference`).
-fn max_dump_difference(a: &[Frame], b: &[Frame]) -> f64 {
-    let d = mcdem::outputs::trajectory_difference(a, b).unwrap();
-    d.iter().map(|(_, e)| *e).fold(0.0, f64::max)
-}
-
 /// Print precision of the decks' dumps: `%.10g`.
 const PRINT_PRECISION: f64 = 1e-9;
 
@@ -77,12 +72,10 @@ fn compare_laws(deck: &str, mc: &[(&str, &str)], stock: &[(&str, &str)]) -> f64 
     b.extend([("dump", "stock.dump"), ("out", "stock.txt")]);
     run_ok(tmp.path(), deck, &a);
     run_ok(tmp.path(), deck, &b);
-    let (da, db) = (read_dump(&tmp.path().join("mc.dump")), read_dump(&tmp.path().join("stock.dump")));
-    assert!(da.len() > 10, "too few frames in the dump");
-    for (q, e) in mcdem::outputs::trajectory_difference(&da, &db).unwrap() {
-        eprintln!("  {deck} {q}: {e:.2e}");
-    }
-    max_dump_difference(&da, &db)
+    assert!(read_dump(&tmp.path().join("mc.dump")).len() > 10, "too few frames in the dump");
+    let d = frames::trajectory_difference(&tmp.path().join("mc.dump"), &tmp.path().join("stock.dump"));
+    eprintln!("  {deck}: {d:?}");
+    d.iter().map(|(_, e)| *e).fold(0.0, f64::max)
 }
 
 #[test]
@@ -169,10 +162,9 @@ fn engine_matches_plugin_step_by_step() {
             run_ok(tmp.path(), deck, &vars);
             std::fs::rename(tmp.path().join("run.dump"), tmp.path().join("plugin.dump")).unwrap();
             run_engine(tmp.path(), deck, &vars);
-            let (a, b) =
-                (read_dump(&tmp.path().join("run.dump")), read_dump(&tmp.path().join("plugin.dump")));
-            assert!(a.len() >= 40, "{deck}: too few frames");
-            for (q, d) in mcdem::outputs::trajectory_difference(&a, &b).unwrap() {
+            assert!(read_dump(&tmp.path().join("run.dump")).len() >= 40, "{deck}: too few frames");
+            let (a, b) = (tmp.path().join("run.dump"), tmp.path().join("plugin.dump"));
+            for (q, d) in frames::trajectory_difference(&a, &b) {
                 eprintln!("{deck} {law:?}: {q} {d:.2e}");
                 assert!(d <= 1e-6, "{deck} {law:?}: {q} differs by {d:e} of its range");
             }

@@ -20,8 +20,10 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 cargo fmt --check
-# Lints for the plain build (nothing but cargo) and for the LIGGGHTS plugin (feature `liggghts`).
-cargo clippy --release --all-targets -- -D warnings
+# Lints for the plain build (nothing but cargo: library and binaries) and for everything with the
+# LIGGGHTS plugin (feature `liggghts`; tests and benches included). The tests' dev-dependencies
+# (polars among them) are checked once, in the second run.
+cargo clippy --release --lib --bins -- -D warnings
 cargo clippy --release --all-targets --features liggghts -- -D warnings
 # One test run covers everything: the feature only adds the C++ shim, `mcdem-liggghts` and its tests.
 cargo test --release --features liggghts

@@ -78,3 +78,41 @@ pub fn aligned_dumps(a: &Path, b: &Path) -> (DataFrame, DataFrame) {
     assert_eq!(values(&a, "id"), values(&b, "id"));
     (a, b)
 }
+
+/// Largest difference between two trajectories (dumps of the same deck by two engines or two rank
+/// counts), per vector quantity (position, v, f, ω) present in the dumps, relative to the largest
+/// magnitude that quantity reaches over the run; atoms matched by id, frames by step. Components
+/// share their vector's scale (a component that is zero by symmetry carries only round-off), and ω
+/// is also measured against the rotation rate the translation would give, max|v| / max r.
+pub fn trajectory_difference(a: &Path, b: &Path) -> Vec<(&'static str, f64)> {
+    let (da, db) = aligned_dumps(a, b);
+    let groups: [(&str, [&str; 3]); 4] = [
+        ("position", ["x", "y", "z"]),
+        ("v", ["vx", "vy", "vz"]),
+        ("f", ["fx", "fy", "fz"]),
+        ("omega", ["omegax", "omegay", "omegaz"]),
+    ];
+    let has = |c: &str| db.get_column_names().iter().any(|n| n.as_str() == c);
+    let mut out: Vec<(&'static str, f64, f64)> = Vec::new();
+    for (name, cols) in groups {
+        if !cols.iter().all(|c| has(c)) {
+            continue;
+        }
+        let (mut scale, mut diff) = (0.0_f64, 0.0_f64);
+        for c in cols {
+            for (p, q) in values(&da, c).iter().zip(values(&db, c)) {
+                scale = scale.max(p.abs()).max(q.abs());
+                diff = diff.max((p - q).abs());
+            }
+        }
+        out.push((name, diff, scale));
+    }
+    let vscale = out.iter().find(|g| g.0 == "v").map(|g| g.2);
+    if let (Some(v), true) = (vscale, has("radius")) {
+        let rmax = values(&db, "radius").into_iter().fold(0.0, f64::max);
+        if let Some(w) = out.iter_mut().find(|g| g.0 == "omega") {
+            w.2 = w.2.max(v / rmax);
+        }
+    }
+    out.into_iter().map(|(n, d, s)| (n, if s > 0.0 { d / s } else { 0.0 })).collect()
+}
