@@ -172,6 +172,31 @@ fn engine_matches_plugin_step_by_step() {
     }
 }
 
+/// SPEC §6 hard case: a dropped three-sphere column. Stock `surface multicontact` aborts with
+/// "sidata.deltan < 0!" when a radius change leaves a touching pair with no effective overlap;
+/// `mc_advanced` treats that contact as open and runs to the end with finite values, the same
+/// trajectory in the plugin and in the engine.
+#[test]
+fn three_sphere_stack_runs_where_stock_multicontact_aborts() {
+    let tmp = TempDir::new().unwrap();
+    let deck = "three_sphere_stack.in";
+    let (out, _) = run(tmp.path(), deck, &[("law", "2"), ("dump", "stock.dump")]);
+    assert!(!out.status.success(), "stock multicontact was expected to abort on this deck");
+    for mpr in ["1e9", "0.11"] {
+        let vars = [("law", "0"), ("mpr", mpr), ("dump", "run.dump")];
+        run_ok(tmp.path(), deck, &vars);
+        let frames = read_dump(&tmp.path().join("run.dump"));
+        assert_eq!(frames.last().map(|f| f.step), Some(20000));
+        assert!(frames.iter().all(|f| f.rows.iter().flatten().all(|v| v.is_finite())));
+        std::fs::rename(tmp.path().join("run.dump"), tmp.path().join("plugin.dump")).unwrap();
+        run_engine(tmp.path(), deck, &vars);
+        let (a, b) = (tmp.path().join("run.dump"), tmp.path().join("plugin.dump"));
+        for (q, d) in frames::trajectory_difference(&a, &b) {
+            assert!(d <= 1e-6, "MPR {mpr}: {q} differs by {d:e} between engine and plugin");
+        }
+    }
+}
+
 /// A copy of the two-particle deck edited by `edit`, written into `dir`.
 fn edited_deck(dir: &Path, edit: impl Fn(&str) -> String) -> String {
     let text = std::fs::read_to_string(decks().join("two_particles.in")).unwrap();

@@ -651,6 +651,9 @@ impl Deck {
                         }
                         "norm" if a.get(k + 1) == Some(&"no") => k += 2,
                         "lost" if a.get(k + 1) == Some(&"error") => k += 2,
+                        // Already so: stdout is line-buffered and the log is flushed when the
+                        // deck ends, after an error too.
+                        "flush" if matches!(a.get(k + 1), Some(&"yes") | Some(&"no")) => k += 2,
                         other => return Err(unsupported(&format!("thermo_modify keyword {other}"))),
                     }
                 }
