@@ -2,6 +2,7 @@
 //! momentum with periodic boundaries; plus the instability stop.
 
 use mcdem::engine::{Closure, Domain, World};
+use mcdem::physics::hertz::Tangential;
 use mcdem::physics::{Material, Vec3};
 
 /// A dilute periodic gas of spheres on a jittered lattice with deterministic pseudo-random
@@ -10,7 +11,13 @@ fn gas(restitution: f64, friction: f64, dt: f64) -> World {
     let mut w = World::new();
     let l = 0.012;
     w.domain = Some(Domain::new(Vec3::zeros(), Vec3::repeat(l), [true; 3]));
-    w.set_materials(vec![Material::hertz(1e6, 0.3).unwrap()], &[restitution], &[friction]).unwrap();
+    w.set_materials(
+        vec![Material::hertz(1e6, 0.3).unwrap()],
+        &[restitution],
+        &[friction],
+        Tangential::History,
+    )
+    .unwrap();
     w.closure = Some(Closure::Hertz);
     w.dt = dt;
     w.skin = 2e-4;
@@ -92,7 +99,7 @@ fn runaway_overlap_stops_with_particle_and_step() {
     // Two spheres driven into each other far faster than the contact can resist.
     let mut w = World::new();
     w.domain = Some(Domain::new(Vec3::repeat(-0.01), Vec3::repeat(0.01), [false; 3]));
-    w.set_materials(vec![Material::hertz(1e3, 0.3).unwrap()], &[1.0], &[0.0]).unwrap();
+    w.set_materials(vec![Material::hertz(1e3, 0.3).unwrap()], &[1.0], &[0.0], Tangential::History).unwrap();
     w.closure = Some(Closure::Hertz);
     w.dt = 1e-6;
     w.skin = 1e-3;

@@ -82,9 +82,12 @@ fn two_particle_collision_matches_liggghts_step_by_step() {
         return;
     }
     let deck = repo().join("liggghts_inputs/two_particle_collision.in");
-    let (o, t) = run_both(&deck, &[], &[]);
-    let f = "post/two_particle.dump";
-    assert_dumps_agree(&o.path().join(f), &t.path().join(f), 1e-6);
+    for tangential in ["history", "no_history"] {
+        let (o, t) = run_both(&deck, &[], &[("tangential", tangential)]);
+        let f = "post/two_particle.dump";
+        println!("tangential {tangential}");
+        assert_dumps_agree(&o.path().join(f), &t.path().join(f), 1e-6);
+    }
 }
 
 #[test]

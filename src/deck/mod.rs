@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::engine::{Closure, Domain, Mesh, PlaneWall, WallFix, WallGeom, World};
+use crate::physics::hertz::Tangential;
 use crate::physics::{Material, MprTest, Vec3};
 use output::{AveTime, Col, Dump};
 
@@ -934,8 +935,8 @@ impl Deck {
         if !matches!(m.model.as_str(), "hertz" | "mc_advanced") {
             return Err(unsupported(&format!("granular model '{}' (hertz or mc_advanced)", m.model)));
         }
-        if m.tangential != "history" {
-            return Err(unsupported(&format!("tangential model '{}' (history)", m.tangential)));
+        if !matches!(m.tangential.as_str(), "history" | "no_history") {
+            return Err(unsupported(&format!("tangential model '{}' (history or no_history)", m.tangential)));
         }
         if m.model == "mc_advanced" && m.surface_mc {
             return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
@@ -1448,7 +1449,9 @@ impl Deck {
                     .map_err(|e| format!("atom type {}: {e}", t + 1))?,
             );
         }
-        self.world.set_materials(mats, &rest, &fric)?;
+        let tangential =
+            if pair.tangential == "no_history" { Tangential::NoHistory } else { Tangential::History };
+        self.world.set_materials(mats, &rest, &fric, tangential)?;
         self.world.closure = Some(closure);
         self.world.liggghts_radii = pair.surface_mc;
         self.world.mc_range =

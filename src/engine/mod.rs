@@ -15,6 +15,7 @@ pub mod neighbor;
 use std::fmt;
 
 use crate::physics::contact_set::{radius_changes, ContactLoad, McParams};
+use crate::physics::hertz::Tangential;
 use crate::physics::pair::{particle_particle, particle_wall, Body, ContactError, WallPoint};
 use crate::physics::{Material, PairCoeffs, Vec3};
 
@@ -997,6 +998,7 @@ impl World {
         materials: Vec<Material>,
         restitution: &[f64],
         friction: &[f64],
+        tangential: Tangential,
     ) -> Result<(), String> {
         let nt = materials.len();
         if restitution.len() != nt * nt || friction.len() != nt * nt {
@@ -1012,6 +1014,7 @@ impl World {
                         restitution[a * nt + b],
                         friction[a * nt + b],
                     )
+                    .map(|c| PairCoeffs { tangential, ..c })
                     .map_err(|e| format!("types {} and {}: {e}", a + 1, b + 1))?,
                 );
             }

@@ -126,6 +126,27 @@ pub fn tangential_history(
     ft
 }
 
+/// The tangential sub-model of a contact (LIGGGHTS `tangential history|no_history`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Tangential {
+    /// Elastic spring on the accumulated tangential displacement with damping and Coulomb limit
+    /// ([`tangential_history`]).
+    #[default]
+    History,
+    /// Viscous tangential damping only, Coulomb-limited ([`tangential_no_history`]).
+    NoHistory,
+}
+
+/// Tangential force without history (LIGGGHTS `tangential no_history`): F_t = −γ v_t,rel with
+/// γ = min(γ_t, μ|F_n| / |v_t,rel|), so |F_t| never exceeds the Coulomb limit. No state.
+#[inline]
+pub fn tangential_no_history(vtr: &Vec3, normal: &NormalForce, friction: f64) -> Vec3 {
+    let vrel = vtr.norm();
+    let ft_friction = friction * normal.force.abs();
+    let gamma = if ft_friction < normal.gamma_t * vrel { ft_friction / vrel } else { normal.gamma_t };
+    -gamma * vtr
+}
+
 #[cfg(test)]
 mod constant_tests {
     #[test]

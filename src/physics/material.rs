@@ -4,6 +4,7 @@
 use std::fmt;
 
 use super::ghods2022::{Cap, MprTest};
+use super::hertz::Tangential;
 
 /// Per-type material of a particle (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -101,6 +102,8 @@ pub struct PairCoeffs {
     pub beta: f64,
     /// Coulomb friction coefficient μ [-].
     pub friction: f64,
+    /// Tangential sub-model (history unless the deck asks for `no_history`).
+    pub tangential: Tangential,
 }
 
 impl PairCoeffs {
@@ -117,6 +120,6 @@ impl PairCoeffs {
         let g_star = 1.0 / (2.0 * (2.0 - ni) * (1.0 + ni) / ei + 2.0 * (2.0 - nj) * (1.0 + nj) / ej);
         let ln_e = e.ln();
         let beta = ln_e / (ln_e * ln_e + std::f64::consts::PI * std::f64::consts::PI).sqrt();
-        Ok(Self { e_star, g_star, beta, friction: mu })
+        Ok(Self { e_star, g_star, beta, friction: mu, tangential: Tangential::History })
     }
 }

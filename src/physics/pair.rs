@@ -5,7 +5,7 @@
 
 use std::fmt;
 
-use super::hertz::{self, NormalForce};
+use super::hertz::{self, NormalForce, Tangential};
 use super::material::PairCoeffs;
 use super::Vec3;
 
@@ -107,7 +107,10 @@ fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3) -> Result<Con
     if c.friction > 0.0 {
         // Relative tangential velocity at the contact point, rotation included (SPEC §1).
         let vtr = g.vr - g.en * vn + g.en.cross(&g.w);
-        let ft = hertz::tangential_history(shear, &vtr, &g.en, dt, &normal, c.friction);
+        let ft = match c.tangential {
+            Tangential::History => hertz::tangential_history(shear, &vtr, &g.en, dt, &normal, c.friction),
+            Tangential::NoHistory => hertz::tangential_no_history(&vtr, &normal, c.friction),
+        };
         let tor = g.en.cross(&ft);
         force_i += ft;
         torque_i = -g.cri * tor;
