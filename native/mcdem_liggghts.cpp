@@ -84,27 +84,30 @@ struct SettingsTableTag {
 };
 template struct PrivateAccess<SettingsTableTag, &Settings::settings>;
 
-class MprTestSetting : public Setting {
+// A keyword with two named options (`mprTest abs|signed`, `pairRadii modified|stock`).
+class ChoiceSetting : public Setting {
 public:
-    explicit MprTestSetting(bool *signed_test) : Setting("mprTest", 1), target_(signed_test) {}
+    ChoiceSetting(const char *name, const char *off, const char *on, bool *target)
+        : Setting(name, 1), off_(off), on_(on), target_(target) {}
     int parseArguments(char **args) {
         if (name != args[0]) return 0;
         const char *v = args[1];
-        if (v && std::strcmp(v, "abs") == 0) {
+        if (v && off_ == v) {
             *target_ = false;
             return 2;
         }
-        if (v && std::strcmp(v, "signed") == 0) {
+        if (v && on_ == v) {
             *target_ = true;
             return 2;
         }
-        error_message = std::string("model mc_advanced: mprTest must be 'abs' or 'signed', got '") +
+        error_message = "model mc_advanced: " + name + " must be '" + off_ + "' or '" + on_ + "', got '" +
                         (v ? v : "") + "'";
         return -1;
     }
-    void print_value(FILE *out) { std::fprintf(out, "%s", *target_ ? "signed" : "abs"); }
+    void print_value(FILE *out) { std::fprintf(out, "%s", (*target_ ? on_ : off_).c_str()); }
 
 private:
+    std::string off_, on_;
     bool *target_;
 };
 
@@ -146,6 +149,7 @@ public:
           tangential_damping_(true),
           limit_force_(false),
           signed_test_(false),
+          stock_pair_radii_(false),
           ntypes_(0),
           sources_ready_(false) {
         // Per-contact record read by the next step's radius changes (the layout LIGGGHTS's
@@ -168,7 +172,10 @@ public:
         settings.registerOnOff("tangential_damping", tangential_damping_, true);
         settings.registerOnOff("limitForce", limit_force_);
         std::map<std::string, Setting *> &table = settings.*private_member(SettingsTableTag());
-        if (table.find("mprTest") == table.end()) table["mprTest"] = new MprTestSetting(&signed_test_);
+        if (table.find("mprTest") == table.end())
+            table["mprTest"] = new ChoiceSetting("mprTest", "abs", "signed", &signed_test_);
+        if (table.find("pairRadii") == table.end())
+            table["pairRadii"] = new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_);
     }
 
     void postSettings(IContactHistorySetup *, ContactModelBase *) {
@@ -230,8 +237,8 @@ public:
         if (sidata.contact_flags) *sidata.contact_flags |= CONTACT_NORMAL_MODEL;
         const int it = sidata.itype, jt = sidata.jtype;
         const double radj = sidata.radj;
-        const double radi = modified_radius_i(sidata);
-        if (!sidata.is_wall) use_modified_lever_arms(sidata, radi);
+        const double radi = stock_pair_radii_ ? sidata.radi : modified_radius_i(sidata);
+        if (!sidata.is_wall && !stock_pair_radii_) use_modified_lever_arms(sidata, radi);
         const double reff = sidata.is_wall ? radi : radi * radj / (radi + radj);
         // Radii shrunk by the multi-contact correction can leave a geometric touch with no
         // effective overlap (or no positive effective radius): that contact carries no force.
@@ -281,7 +288,7 @@ public:
             for (int k = 0; k < 3; k++) rec[k] = scdata.delta[k] * s;
             rec[3] = 0.0;
         } else {
-            rec[0] = modified_radius_i(scdata);
+            rec[0] = stock_pair_radii_ ? scdata.radi : modified_radius_i(scdata);
             rec[1] = scdata.radj;
             rec[2] = 0.0;
         }
@@ -508,6 +515,9 @@ private:
     bool tangential_damping_;
     bool limit_force_;
     bool signed_test_;
+    // `pairRadii stock`: pairs keep LIGGGHTS's convention (first partner's original radius in R_eff,
+    // lever arm and contact point), to reproduce decks run with the stock `surface multicontact`.
+    bool stock_pair_radii_;
     int ntypes_;
     std::vector<mcdem_mc_params> params_;
     std::vector<std::vector<mcdem_pair_coeffs> > coeffs_;

@@ -98,16 +98,20 @@ fn mpr_zero_is_stock_hertz_with_primitive_and_mesh_walls() {
 
 #[test]
 fn huge_mpr_is_stock_multicontact_same_gamma() {
-    // Stock multicontact registers a contact distance factor of 2; use it for both. With walls
-    // only (the particle in the die) the two are the same model: equal to print precision. In
-    // pairs they differ by a second-order convention (SPEC §2): LIGGGHTS's pair loop keeps the
-    // first partner's original radius in R_eff, the lever arm and the contact point, mc_advanced
-    // uses both modified radii, so the pair does not depend on the neighbour-list order.
+    // Stock multicontact registers a contact distance factor of 2; use it for both. With
+    // `pairRadii stock` mc_advanced uses LIGGGHTS's pair convention (the first partner's original
+    // radius in R_eff, lever arm and contact point) and is the stock model to round-off. With the
+    // default `pairRadii modified` (SPEC §2: both partners' modified radii, so a pair does not
+    // depend on the neighbour-list order) pairs differ at second order; walls are unaffected.
     for (deck, tol) in [("single_particle_plates.in", 1e-6), ("two_particles.in", 0.03), ("bcc_box.in", 0.03)]
     {
-        let d = compare_laws(deck, &[("mpr", "1e9"), ("cdf", "2.0")], &[("law", "2"), ("cdf", "2.0")]);
-        eprintln!("{deck}: mc_advanced MPR = 1e9 vs stock multicontact, max relative difference {d:e}");
-        assert!(d <= tol, "{deck}: max relative difference {d:e}");
+        let stock = [("law", "2"), ("cdf", "2.0")];
+        let d = compare_laws(deck, &[("mpr", "1e9"), ("cdf", "2.0"), ("pairradii", "stock")], &stock);
+        eprintln!("{deck}: mc_advanced MPR = 1e9, pairRadii stock vs stock multicontact: {d:e}");
+        assert!(d <= 1e-6, "{deck}: pairRadii stock, max relative difference {d:e}");
+        let d = compare_laws(deck, &[("mpr", "1e9"), ("cdf", "2.0")], &stock);
+        eprintln!("{deck}: mc_advanced MPR = 1e9, pairRadii modified vs stock multicontact: {d:e}");
+        assert!(d <= tol, "{deck}: pairRadii modified, max relative difference {d:e}");
     }
 }
 
@@ -240,6 +244,7 @@ fn bad_decks_stop_with_one_error_line_naming_the_cause() {
     });
     expect_error((&deck, vec![]), d, &["maxPenetrationRatio", "-1", "type 2"]);
     expect_error((two, vec![("mprtest", "sometimes")]), d, &["mprTest", "sometimes"]);
+    expect_error((two, vec![("pairradii", "both")]), d, &["pairRadii", "both"]);
 
     let deck = edited_deck(d, |t| {
         t.replace("poissonsRatio peratomtype 0.5 0.5", "poissonsRatio peratomtype 0.6 0.5")
@@ -276,7 +281,7 @@ fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
     let tmp = TempDir::new().unwrap();
     let common = [("stroke", "3000"), ("strokes", "1"), ("every", "100"), ("cdf", "2.0")];
     let mut mc = common.to_vec();
-    mc.extend([("law", "0"), ("mpr", "1e9"), ("out", "mc.txt")]);
+    mc.extend([("law", "0"), ("mpr", "1e9"), ("pairradii", "stock"), ("out", "mc.txt")]);
     let mut st = common.to_vec();
     st.extend([("law", "2"), ("out", "stock.txt")]);
     run_ok(tmp.path(), "hydrogel.in", &mc);

@@ -67,6 +67,8 @@ struct GranModel {
     tangential: String,
     surface_mc: bool,
     mpr_test: MprTest,
+    /// `pairRadii stock`: pairs with LIGGGHTS's radius convention (see docs/dem.md).
+    stock_pair_radii: bool,
 }
 
 #[derive(Debug, Clone)]
@@ -915,6 +917,7 @@ impl Deck {
             tangential: "history".into(),
             surface_mc: false,
             mpr_test: MprTest::Abs,
+            stock_pair_radii: false,
         };
         let mut k = start;
         while k < a.len() {
@@ -926,6 +929,11 @@ impl Deck {
                 ("surface", Some("default")) => m.surface_mc = false,
                 ("surface", Some("multicontact")) => m.surface_mc = true,
                 ("mprTest", Some(x)) => m.mpr_test = x.parse()?,
+                ("pairRadii", Some("modified")) => m.stock_pair_radii = false,
+                ("pairRadii", Some("stock")) => m.stock_pair_radii = true,
+                ("pairRadii", Some(x)) => {
+                    return Err(format!("pairRadii must be 'modified' or 'stock', got '{x}'"))
+                }
                 // LIGGGHTS' default for hertz; the core always applies tangential damping.
                 ("tangential_damping", Some("on")) => {}
                 _ => break,
@@ -937,6 +945,9 @@ impl Deck {
         }
         if !matches!(m.tangential.as_str(), "history" | "no_history") {
             return Err(unsupported(&format!("tangential model '{}' (history or no_history)", m.tangential)));
+        }
+        if m.stock_pair_radii && m.model != "mc_advanced" {
+            return Err("pairRadii is a setting of model mc_advanced".into());
         }
         if m.model == "mc_advanced" && m.surface_mc {
             return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
@@ -1117,8 +1128,14 @@ impl Deck {
 
     fn wall_gran(&mut self, a: &[&str]) -> R<FixKind> {
         let (m, mut k) = Self::gran_model(a, 4)?;
+        // The wall runs the pair style's model: the same law and sub-models. Settings may be given
+        // before or after the geometry; mprTest must then agree, pairRadii concerns pairs only.
+        let same = |p: &GranModel| {
+            (&p.model, &p.tangential, p.surface_mc) == (&m.model, &m.tangential, m.surface_mc)
+                && (p.mpr_test == m.mpr_test || !a[4..k].contains(&"mprTest"))
+        };
         match &self.pair {
-            Some(p) if *p == m => {}
+            Some(p) if same(p) => {}
             Some(_) => return Err(unsupported("a wall model different from the pair model")),
             None => return Err("fix wall/gran before pair_style gran".into()),
         }
@@ -1168,6 +1185,8 @@ impl Deck {
                         return Err(format!("wall/gran mprTest {x} differs from the pair style's"));
                     }
                 }
+                // Pairs only: a wall contact always uses the particle's modified radius.
+                ("pairRadii", Some("modified" | "stock")) => {}
                 _ => return Err(unsupported(&format!("wall/gran keyword {}", a[k]))),
             }
             k += 2;
@@ -1453,7 +1472,7 @@ impl Deck {
             if pair.tangential == "no_history" { Tangential::NoHistory } else { Tangential::History };
         self.world.set_materials(mats, &rest, &fric, tangential)?;
         self.world.closure = Some(closure);
-        self.world.liggghts_radii = pair.surface_mc;
+        self.world.liggghts_radii = pair.surface_mc || pair.stock_pair_radii;
         self.world.mc_range =
             self.world.mc_range.max(if closure == Closure::MultiContact { 1.25 } else { 1.0 });
         Ok(())
