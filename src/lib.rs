@@ -5,6 +5,7 @@
 //! Layers point inward: [`physics`] is the single implementation of the contact laws; [`ffi`] exposes
 //! it to C/C++ (the LIGGGHTS plugin); the command-line front end lives in `src/main.rs`.
 
+pub mod bench;
 pub mod checks;
 pub mod contacts_cli;
 pub mod deck;

@@ -45,6 +45,15 @@ enum Command {
         #[arg(long)]
         contacts: Option<PathBuf>,
     },
+    /// Speed of every engine and model on the same scenes, measured side by side (ratios)
+    Bench {
+        /// CI size: short strokes, smaller packings
+        #[arg(long)]
+        quick: bool,
+        /// Also write the rows and ratios as JSON
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Run the validation suite and write the report
     Validate {
         /// Quick subset (CI)
@@ -119,6 +128,16 @@ fn nonlocal(scene: PathBuf, out: Option<PathBuf>, contacts: Option<PathBuf>) -> 
     Ok(())
 }
 
+fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), String> {
+    let report = mcdem::bench::run(mcdem::bench::Options { quick }, &mut |l| eprintln!("{l}"))?;
+    print!("{}", mcdem::bench::table(&report));
+    if let Some(p) = json {
+        let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        std::fs::write(&p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse_from(liggghts_args());
     let result = match cli.command {
@@ -126,6 +145,7 @@ fn main() -> ExitCode {
         Command::Validate { quick, cases, out } => validate(quick, cases, out),
         Command::Run { deck, var, log, no_progress } => run(deck, var, log, no_progress),
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
+        Command::Bench { quick, json } => bench(quick, json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

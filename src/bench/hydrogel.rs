@@ -1,0 +1,136 @@
+//! The 514-particle hydrogel compression (`liggghts_inputs/hydrogel.in`, the Debian example
+//! `hydrogel_multicontact` with its three contact laws, no VTK output) run by every engine
+//! available: stock LIGGGHTS (`hertz`, `surface multicontact`), the `mc_advanced` plugin, and the
+//! Rust DEM (same three laws) with 1 and 2 threads. Each run is a child process; the rate comes
+//! from the "Loop time" lines both engines print.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use super::{Options, Report, Row};
+
+pub const SCENE: &str = "hydrogel_514";
+
+const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
+
+/// (law variable, model name) as in `liggghts_inputs/select_law.inc`.
+const LAWS: [(&str, &str); 3] = [("1", "hertz"), ("2", "standard_mc"), ("0", "mc_advanced")];
+
+/// Seconds, steps and atoms summed over the "Loop time of T on P procs for N steps with A atoms"
+/// lines of a LIGGGHTS or mcdem log.
+fn loop_time(text: &str) -> Option<(f64, f64, usize)> {
+    let (mut t, mut steps, mut atoms) = (0.0, 0.0, 0);
+    for l in text.lines().filter(|l| l.starts_with("Loop time of")) {
+        let w: Vec<&str> = l.split_whitespace().collect();
+        t += w.get(3)?.parse::<f64>().ok()?;
+        steps += w.get(8)?.parse::<f64>().ok()?;
+        atoms = w.get(11)?.parse().ok()?;
+    }
+    (steps > 0.0).then_some((t, steps, atoms))
+}
+
+fn sibling(name: &str) -> Option<PathBuf> {
+    let p = std::env::current_exe().ok()?.with_file_name(name);
+    p.exists().then_some(p)
+}
+
+fn on_path(name: &str) -> bool {
+    Command::new(name).arg("-h").output().is_ok()
+}
+
+/// Runs one deck; returns (seconds, particle-steps per second).
+fn measure(cmd: &mut Command, what: &str) -> Result<(f64, f64), String> {
+    let work = std::env::temp_dir().join(format!("mcdem-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&work).map_err(|e| e.to_string())?;
+    let out = cmd.current_dir(&work).output().map_err(|e| format!("{what}: cannot start: {e}"))?;
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let _ = std::fs::remove_dir_all(&work);
+    if !out.status.success() {
+        let tail: Vec<&str> = text.lines().rev().take(5).collect();
+        return Err(format!("{what} failed: {}", tail.join(" | ")));
+    }
+    let (t, steps, atoms) = loop_time(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
+    Ok((t, steps * atoms as f64 / t))
+}
+
+pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
+    let decks = Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs");
+    if !decks.join("hydrogel.in").exists() || !Path::new(EXAMPLE).join("data/input.data").exists() {
+        report.notes.push(format!(
+            "hydrogel rows skipped: needs {} and the liggghts-doc example in {EXAMPLE}",
+            decks.join("hydrogel.in").display()
+        ));
+        return Ok(());
+    }
+    let (stroke, strokes) = if opts.quick { ("1500", "2") } else { ("30000", "4") };
+    let deck = decks.join("hydrogel.in");
+    let vars = |law: &str| -> Vec<String> {
+        ["-var", "law", law, "-var", "stroke", stroke, "-var", "strokes", strokes, "-var", "dir"]
+            .iter()
+            .map(|s| s.to_string())
+            .chain([decks.display().to_string()])
+            .collect()
+    };
+    report.notes.push(format!("hydrogel: {strokes} strokes of {stroke} steps (the example: 4 of 30000)"));
+    let push = |report: &mut Report, engine, model: &str, threads, (secs, rate): (f64, f64)| {
+        report.rows.push(Row {
+            engine,
+            model: model.into(),
+            scene: SCENE.into(),
+            n: 514,
+            threads,
+            particle_steps_per_s: rate,
+            wall_time_s: secs,
+            memory_bytes_per_particle: None,
+        })
+    };
+
+    // LIGGGHTS: the stock laws with the Debian `liggghts`, mc_advanced with the plugin executable.
+    let plugin = sibling("mcdem-liggghts");
+    let stock = if on_path("liggghts") { Some(PathBuf::from("liggghts")) } else { plugin.clone() };
+    match (&stock, &plugin) {
+        (None, None) => {
+            report.notes.push("LIGGGHTS rows skipped: neither liggghts nor mcdem-liggghts found".into())
+        }
+        _ => {
+            if plugin.is_none() {
+                report
+                    .notes
+                    .push("LIGGGHTS mc_advanced row skipped: build mcdem-liggghts (feature liggghts)".into());
+            }
+            for (law, model) in LAWS {
+                let exe = if law == "0" { plugin.as_ref() } else { stock.as_ref() };
+                let Some(exe) = exe else { continue };
+                let mut c = Command::new(exe);
+                c.arg("-in").arg(&deck).args(vars(law)).args(["-log", "none"]);
+                let r = measure(&mut c, &format!("liggghts {model}"))?;
+                say(&format!("hydrogel, liggghts {model}: {:.3e} particle-steps/s", r.1));
+                push(report, "liggghts", model, 1, r);
+            }
+        }
+    }
+    // Rust DEM, 1 and 2 threads.
+    let me = std::env::current_exe().map_err(|e| e.to_string())?;
+    for (law, model) in LAWS {
+        for threads in [1usize, 2] {
+            let mut c = Command::new(&me);
+            c.arg("run").arg(&deck).args(vars(law)).args(["-log", "none", "--no-progress"]);
+            c.env("RAYON_NUM_THREADS", threads.to_string());
+            let r = measure(&mut c, &format!("mcdem run {model}"))?;
+            say(&format!("hydrogel, rust {model}, {threads} thread(s): {:.3e} particle-steps/s", r.1));
+            push(report, "rust", model, threads, r);
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn loop_time_lines_of_both_engines_are_summed() {
+        let text = "x\nLoop time of 2.5 on 1 procs for 1000 steps with 514 atoms\n\
+                    Loop time of 0.5 on 1 procs for 1000 steps with 514 atoms (1e6 particle-steps/s, 2 threads, 3 neighbour builds)\n";
+        assert_eq!(super::loop_time(text), Some((3.0, 2000.0, 514)));
+        assert_eq!(super::loop_time("nothing"), None);
+    }
+}

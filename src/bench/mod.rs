@@ -1,0 +1,130 @@
+//! `mcdem bench`: the same scenes with every engine and model available, measured side by side in
+//! one invocation so that every ratio compares runs that saw the same machine. Absolute rates on a
+//! shared machine mean little; the ratios are the result.
+//!
+//! Rows: the 514-particle hydrogel deck with LIGGGHTS (stock `hertz`, stock `surface multicontact`,
+//! the `mc_advanced` plugin) and the Rust DEM (same three laws, 1 and 2 threads); a dense periodic
+//! packing (φ = 0.8) at growing N for the Rust DEM; the contact-set kernel at 2, 6 and 12 contacts.
+
+mod hydrogel;
+mod kernel;
+mod packing;
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+/// One measurement.
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    /// `rust` or `liggghts`.
+    pub engine: &'static str,
+    /// `hertz`, `standard_mc` (γ only), `mc_advanced` (γ and MPR), or a kernel variant.
+    pub model: String,
+    pub scene: String,
+    /// Particles in the scene (contacts per particle for kernel rows).
+    pub n: usize,
+    pub threads: usize,
+    /// Particle-steps per second (kernel rows: particles, i.e. kernel calls, per second).
+    pub particle_steps_per_s: f64,
+    pub wall_time_s: f64,
+    /// Resident memory added by the scene, per particle (dense packing rows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory_bytes_per_particle: Option<f64>,
+}
+
+/// What `mcdem bench` prints and writes.
+#[derive(Debug, Default, Serialize)]
+pub struct Report {
+    pub rows: Vec<Row>,
+    /// Named ratios of rows of this run (costs: > 1 means slower).
+    pub ratios: BTreeMap<String, f64>,
+    /// Which row groups ran, and why others did not.
+    pub notes: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct Options {
+    /// CI size: shorter strokes, smaller packings, fewer steps.
+    pub quick: bool,
+}
+
+/// Runs every available row group; `say` receives progress lines.
+pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
+    let mut report = Report::default();
+    kernel::rows(opts, &mut report, say);
+    packing::rows(opts, &mut report, say)?;
+    hydrogel::rows(opts, &mut report, say)?;
+    ratios(&mut report);
+    Ok(report)
+}
+
+fn find<'a>(r: &'a Report, engine: &str, model: &str, scene: &str, threads: usize) -> Option<&'a Row> {
+    r.rows.iter().find(|x| x.engine == engine && x.model == model && x.scene == scene && x.threads == threads)
+}
+
+/// Cost ratios (time per particle-step of the first row over the second).
+fn ratios(r: &mut Report) {
+    let mut out = BTreeMap::new();
+    let h = hydrogel::SCENE;
+    let cost = |a: Option<&Row>, b: Option<&Row>| match (a, b) {
+        (Some(a), Some(b)) => Some(b.particle_steps_per_s / a.particle_steps_per_s),
+        _ => None,
+    };
+    let pairs = [
+        ("liggghts: mc_advanced / hertz", ("liggghts", "mc_advanced", 1), ("liggghts", "hertz", 1)),
+        ("liggghts: standard_mc / hertz", ("liggghts", "standard_mc", 1), ("liggghts", "hertz", 1)),
+        ("rust 1 thread: mc_advanced / hertz", ("rust", "mc_advanced", 1), ("rust", "hertz", 1)),
+        ("rust 1 thread: standard_mc / hertz", ("rust", "standard_mc", 1), ("rust", "hertz", 1)),
+        ("hertz: rust 1 thread / liggghts", ("rust", "hertz", 1), ("liggghts", "hertz", 1)),
+        ("hertz: rust 2 threads / liggghts", ("rust", "hertz", 2), ("liggghts", "hertz", 1)),
+        ("mc_advanced: rust 1 thread / liggghts", ("rust", "mc_advanced", 1), ("liggghts", "mc_advanced", 1)),
+    ];
+    for (name, (e1, m1, t1), (e2, m2, t2)) in pairs {
+        if let Some(v) = cost(find(r, e1, m1, h, t1), find(r, e2, m2, h, t2)) {
+            out.insert(name.to_string(), v);
+        }
+    }
+    // Cost per particle-step across packing sizes, relative to the smallest (1 thread).
+    let sizes: Vec<&Row> = r
+        .rows
+        .iter()
+        .filter(|x| x.scene.starts_with(packing::SCENE) && x.threads == 1 && x.model == "hertz")
+        .collect();
+    if let (Some(first), Some(last)) = (sizes.first(), sizes.last()) {
+        if first.n != last.n {
+            let name = format!("packing hertz 1 thread: cost per particle-step N={} / N={}", last.n, first.n);
+            out.insert(name, first.particle_steps_per_s / last.particle_steps_per_s);
+        }
+    }
+    r.ratios = out;
+}
+
+/// A plain-text table of the report.
+pub fn table(r: &Report) -> String {
+    let mut s = format!(
+        "{:<9} {:<12} {:<28} {:>7} {:>3} {:>14} {:>10}\n",
+        "engine", "model", "scene", "n", "thr", "particle-st/s", "wall [s]"
+    );
+    for x in &r.rows {
+        s.push_str(&format!(
+            "{:<9} {:<12} {:<28} {:>7} {:>3} {:>14.4e} {:>10.2}{}\n",
+            x.engine,
+            x.model,
+            x.scene,
+            x.n,
+            x.threads,
+            x.particle_steps_per_s,
+            x.wall_time_s,
+            x.memory_bytes_per_particle.map_or(String::new(), |m| format!("  {m:.0} B/particle"))
+        ));
+    }
+    s.push_str("\nratios (cost, > 1 = slower):\n");
+    for (k, v) in &r.ratios {
+        s.push_str(&format!("  {k:<60} {v:.2}\n"));
+    }
+    for n in &r.notes {
+        s.push_str(&format!("note: {n}\n"));
+    }
+    s
+}

@@ -1,0 +1,130 @@
+//! Dense periodic packing for the Rust DEM: N spheres (diameter 1 mm ± 5 %) on a face-centred
+//! cubic lattice squeezed to a solid fraction of 0.8 (about 12 overlapping neighbours each, several
+//! per cent overlap), small random velocities, triply periodic. Cost per particle-step at growing
+//! N shows whether neighbour search and memory layout scale; resident memory per particle is read
+//! from /proc while the scene is alive.
+
+use std::time::Instant;
+
+use super::{Options, Report, Row};
+use crate::engine::{Closure, Domain, World};
+use crate::physics::ghods2022::MprTest;
+use crate::physics::hertz::Tangential;
+use crate::physics::{Material, Vec3};
+
+pub const SCENE: &str = "packing_phi0.8";
+
+/// Lattice cells per side for the sizes measured (4 k³ particles).
+fn cells(quick: bool) -> &'static [usize] {
+    if quick {
+        &[8, 17]
+    } else {
+        &[8, 17, 29]
+    }
+}
+
+/// Resident set size of this process [bytes] (Linux; None elsewhere).
+fn rss_bytes() -> Option<f64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: f64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4096.0)
+}
+
+fn packing(k: usize, advanced: bool) -> Result<World, String> {
+    let d = 1e-3;
+    // fcc at contact: a = √2 d, φ = π/(3√2) ≈ 0.7405; shrink the lattice to reach φ = 0.8.
+    let phi_fcc = std::f64::consts::PI / (3.0 * 2f64.sqrt());
+    let a = 2f64.sqrt() * d * (phi_fcc / 0.8).cbrt();
+    let l = a * k as f64;
+    let mut w = World::new();
+    w.domain = Some(Domain::new(Vec3::zeros(), Vec3::repeat(l), [true; 3]));
+    let m = if advanced {
+        Material::new(1e6, 0.4, 0.81, Some((0.11, MprTest::Abs))).map_err(|e| e.to_string())?
+    } else {
+        Material::hertz(1e6, 0.4).map_err(|e| e.to_string())?
+    };
+    w.set_materials(vec![m], &[0.7], &[0.5], Tangential::History)?;
+    w.closure = Some(if advanced { Closure::MultiContact } else { Closure::Hertz });
+    if advanced {
+        w.mc_range = 1.25;
+    }
+    w.skin = 0.05 * d;
+    w.integrate = true;
+    let mut seed = 0x9e3779b97f4a7c15u64;
+    let mut rnd = move || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    let basis = [[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]];
+    let mut id = 1;
+    for i in 0..k {
+        for j in 0..k {
+            for kk in 0..k {
+                for b in basis {
+                    let x =
+                        Vec3::new(i as f64 + b[0] + 0.25, j as f64 + b[1] + 0.25, kk as f64 + b[2] + 0.25)
+                            * a;
+                    w.p.push(id, 0, x, d * (1.0 + 0.05 * rnd()), 1000.0);
+                    let n = w.p.len() - 1;
+                    w.p.v[n] = Vec3::new(rnd(), rnd(), rnd()) * 1e-3;
+                    id += 1;
+                }
+            }
+        }
+    }
+    // A tenth of the Rayleigh time of the smallest sphere (G = E/2(1+ν)).
+    let g: f64 = 1e6 / (2.0 * 1.4);
+    w.dt = 0.1 * std::f64::consts::PI * 0.475 * d * (1000.0 / g).sqrt() / (0.1631 * 0.4 + 0.8766);
+    Ok(w)
+}
+
+pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
+    let steps = if opts.quick { 40 } else { 200 };
+    let base = rss_bytes();
+    for &k in cells(opts.quick) {
+        for (model, advanced) in [("hertz", false), ("mc_advanced", true)] {
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| e.to_string())?;
+                let (n, secs, mem) = pool.install(|| -> Result<(usize, f64, Option<f64>), String> {
+                    let mut w = packing(k, advanced)?;
+                    w.setup()?;
+                    // Warm-up: the neighbour list, contact histories and the thread-use probe.
+                    for _ in 0..5 {
+                        w.step().map_err(|e| e.to_string())?;
+                    }
+                    let n = w.p.len();
+                    let mem = match (base, rss_bytes()) {
+                        (Some(b), Some(now)) => Some((now - b).max(0.0) / n as f64),
+                        _ => None,
+                    };
+                    let t0 = Instant::now();
+                    for _ in 0..steps {
+                        w.step().map_err(|e| e.to_string())?;
+                    }
+                    Ok((n, t0.elapsed().as_secs_f64(), mem))
+                })?;
+                report.rows.push(Row {
+                    engine: "rust",
+                    model: model.into(),
+                    scene: format!("{SCENE}_N{n}"),
+                    n,
+                    threads,
+                    particle_steps_per_s: (n * steps) as f64 / secs,
+                    wall_time_s: secs,
+                    memory_bytes_per_particle: mem,
+                });
+                say(&format!(
+                    "packing N = {n}, {model}, {threads} thread(s): {:.3e} particle-steps/s",
+                    (n * steps) as f64 / secs
+                ));
+            }
+        }
+    }
+    report.notes.push(format!(
+        "packing: {steps} steps after 5 warm-up steps; memory = resident-set growth over the start of the bench while the scene is alive"
+    ));
+    Ok(())
+}
