@@ -78,6 +78,20 @@ fn nested_loops_with_label_next_and_jump() {
 }
 
 #[test]
+fn pair_local_output_errors_name_the_problem() {
+    let (ok, out) = run_deck(&format!("{BASE}compute fc all pair/gran/local\nrun 1\n"), &[]);
+    assert!(!ok && out.contains("list the keywords"), "{out}");
+    let (ok, out) = run_deck(&format!("{BASE}compute fc all pair/gran/local pos heatFlux\nrun 1\n"), &[]);
+    assert!(!ok && out.contains("unsupported compute pair/gran/local keyword heatFlux"), "{out}");
+    let (ok, out) = run_deck(&format!("{BASE}dump dl all local 1 c.dump c_nope[1]\nrun 1\n"), &[]);
+    assert!(!ok && out.contains("no compute pair/gran/local nope"), "{out}");
+    let text =
+        format!("{BASE}compute fc all pair/gran/local delta\ndump dl all local 1 c.dump c_fc[2]\nrun 1\n");
+    let (ok, out) = run_deck(&text, &[]);
+    assert!(!ok && out.contains("c_fc[2] beyond its 1 columns"), "{out}");
+}
+
+#[test]
 fn bad_material_value_is_named() {
     let text = BASE.replace("poissonsRatio peratomtype 0.3", "poissonsRatio peratomtype 0.7") + "run 1\n";
     let (ok, out) = run_deck(&text, &[]);

@@ -87,6 +87,31 @@ fn two_particle_collision_matches_liggghts_step_by_step() {
         let f = "post/two_particle.dump";
         println!("tangential {tangential}");
         assert_dumps_agree(&o.path().join(f), &t.path().join(f), 1e-6);
+        // compute pair/gran/local + dump local: every column of every contact entry, to the
+        // dump's 6 printed digits.
+        let f = "post/two_particle_contacts.dump";
+        let read = |d: &tempfile::TempDir| mcdem::outputs::read_dump(&d.path().join(f)).unwrap();
+        let (a, b) = (read(&o), read(&t));
+        assert_eq!(a.len(), b.len());
+        assert!(b.iter().filter(|fr| !fr.rows.is_empty()).count() >= 10, "too few frames with a contact");
+        let width = b[0].columns.len();
+        assert_eq!(width, 29);
+        for c in 0..width {
+            let scale = b.iter().flat_map(|fr| fr.rows.iter().map(move |r| r[c].abs())).fold(0.0, f64::max);
+            for (fa, fb) in a.iter().zip(&b) {
+                assert_eq!((fa.step, fa.rows.len()), (fb.step, fb.rows.len()));
+                for (ra, rb) in fa.rows.iter().zip(&fb.rows) {
+                    assert!(
+                        (ra[c] - rb[c]).abs() <= 1e-5 * scale,
+                        "step {} column {}: {} vs {}",
+                        fa.step,
+                        c + 1,
+                        ra[c],
+                        rb[c]
+                    );
+                }
+            }
+        }
     }
 }
 

@@ -7,6 +7,7 @@
 
 pub mod expr;
 pub mod format;
+mod local;
 pub mod output;
 
 use std::collections::HashMap;
@@ -112,6 +113,8 @@ struct Deck {
     thermo_cols: Vec<String>,
     thermo_float: Option<format::Spec>,
     dumps: Vec<Dump>,
+    local_dumps: Vec<local::LocalDump>,
+    pair_locals: HashMap<String, local::PairLocal>,
     aves: Vec<Option<AveTime>>,
     progress: bool,
     summary: RunSummary,
@@ -224,6 +227,8 @@ impl Deck {
             thermo_cols: vec!["step".into(), "atoms".into(), "ke".into()],
             thermo_float: None,
             dumps: Vec::new(),
+            local_dumps: Vec::new(),
+            pair_locals: HashMap::new(),
             aves: Vec::new(),
             progress: opts.progress,
             summary: RunSummary::default(),
@@ -612,6 +617,13 @@ impl Deck {
             "unfix" => self.unfix(&a)?,
             "compute" => {
                 need(4)?;
+                if a[3] == "pair/gran/local" {
+                    if a[2] != "all" {
+                        return Err(unsupported(&format!("compute group '{}' (all)", a[2])));
+                    }
+                    self.pair_locals.insert(a[1].into(), local::PairLocal::parse(&a[4..])?);
+                    return Ok(());
+                }
                 let kind = match a[3] {
                     "erotate/sphere" => ComputeKind::ERotate,
                     "ke" => ComputeKind::Ke,
@@ -666,6 +678,7 @@ impl Deck {
             "undump" => {
                 need(2)?;
                 self.dumps.retain(|d| d.name != a[1]);
+                self.local_dumps.retain(|d| d.name != a[1]);
             }
             "variable" => self.variable(&a)?,
             "label" => need(2)?,
@@ -1288,6 +1301,13 @@ impl Deck {
                 return Ok(());
             }
             "custom" => {}
+            "local" => {
+                if a[2] != "all" {
+                    return Err(unsupported(&format!("dump group '{}' (all)", a[2])));
+                }
+                self.local_dumps.push(local::LocalDump::parse(a[1], &a[4..])?);
+                return Ok(());
+            }
             other => return Err(unsupported(&format!("dump style {other}"))),
         }
         if a.len() < 7 {
@@ -1524,16 +1544,28 @@ impl Deck {
     fn end_of_step_outputs(&mut self, last: bool) -> R<Option<String>> {
         let step = self.world.step;
         self.sample_ave_times()?;
-        for d in &mut self.dumps {
-            if step % d.every == 0 && d.last != Some(step) {
-                d.write(&self.world)?;
-            }
-        }
+        self.write_dumps()?;
         let thermo_due = last || (self.thermo_every > 0 && step % self.thermo_every == 0);
         if thermo_due {
             return Ok(Some(self.thermo_line()?));
         }
         Ok(None)
+    }
+
+    /// Every dump due at the current step writes its frame (once per step).
+    fn write_dumps(&mut self) -> R<()> {
+        let step = self.world.step;
+        for d in &mut self.dumps {
+            if step % d.every == 0 && d.last != Some(step) {
+                d.write(&self.world)?;
+            }
+        }
+        for d in &mut self.local_dumps {
+            if step % d.every == 0 && d.last != Some(step) {
+                d.write(&mut self.world, &self.pair_locals)?;
+            }
+        }
+        Ok(())
     }
 
     /// Every `fix ave/time` due at the current step samples (and writes, at the end of its window).
@@ -1586,11 +1618,10 @@ impl Deck {
         self.say("Setting up run ...");
         let header = self.thermo_header();
         self.say(&header);
-        for d in &mut self.dumps {
-            if self.world.step % d.every == 0 && d.last != Some(self.world.step) {
-                d.write(&self.world)?;
-            }
+        for d in &self.local_dumps {
+            d.check(&self.pair_locals)?;
         }
+        self.write_dumps()?;
         let first = self.thermo_line()?;
         self.say(&first);
         let bar = if self.progress && std::io::stdout().is_terminal() && nsteps >= 1000 {

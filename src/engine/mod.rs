@@ -195,6 +195,23 @@ struct Pair {
     drj: f64,
     /// Total contact force on i from j at the last evaluation (zero when apart): stress compute.
     force: Vec3,
+    /// Torque on i from this contact at the last evaluation (`compute pair/gran/local`).
+    torque: Vec3,
+}
+
+/// One touching particle pair as output sees it (indices into the particle arrays).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairContact {
+    pub i: usize,
+    pub j: usize,
+    /// x_i − x_j, minimum image.
+    pub branch: Vec3,
+    /// The pair touches across a periodic boundary.
+    pub periodic: bool,
+    /// Contact force on i [N].
+    pub force: Vec3,
+    /// Contact torque on i [N m].
+    pub torque: Vec3,
 }
 
 /// A particle close to a wall element (plane, or one triangle of a mesh) with its history.
@@ -576,6 +593,7 @@ impl World {
                     dri: 0.0,
                     drj: 0.0,
                     force: Vec3::zeros(),
+                    torque: Vec3::zeros(),
                 },
             });
         }
@@ -981,6 +999,43 @@ impl World {
         (sc, sk)
     }
 
+    /// Re-evaluates every pair at the current positions and velocities without advancing contact
+    /// histories or touching particle forces: per-contact output at the end of a step sees the
+    /// full-step velocities, as LIGGGHTS's `compute pair/gran/local` (which calls the pair style
+    /// again with history updates off) does.
+    pub fn evaluate_pair_outputs(&mut self) -> Result<(), StepError> {
+        let Some(domain) = self.domain else { return Ok(()) };
+        let ctx = PairCtx {
+            p: &self.p,
+            coeffs: &self.coeffs,
+            nt: self.ntypes,
+            domain,
+            dt: 0.0,
+            update: false,
+            step: self.step,
+            liggghts_radii: self.liggghts_radii,
+        };
+        for pr in self.pairs.iter_mut() {
+            ctx.eval(pr)?;
+        }
+        Ok(())
+    }
+
+    /// Every particle–particle contact carrying a force at the last force pass, with what
+    /// `compute pair/gran/local` reports.
+    pub fn touching_pairs(&self) -> impl Iterator<Item = PairContact> + '_ {
+        let domain = self.domain;
+        self.pairs.iter().filter(|p| p.force != Vec3::zeros()).map(move |p| {
+            let (i, j) = (p.i as usize, p.j as usize);
+            let raw = self.p.x[i] - self.p.x[j];
+            let mut branch = raw;
+            if let Some(d) = domain {
+                d.minimum_image(&mut branch);
+            }
+            PairContact { i, j, branch, periodic: branch != raw, force: p.force, torque: p.torque }
+        })
+    }
+
     /// Particle–particle contacts carrying a force at the last force pass (set-up pass included).
     pub fn pair_contacts(&self) -> usize {
         self.pairs.iter().filter(|p| p.force != Vec3::zeros()).count()
@@ -1065,6 +1120,7 @@ impl PairCtx<'_> {
         if d.norm_squared() >= radsum * radsum {
             // The force is output, not history: the set-up pass records it too.
             pr.force = Vec3::zeros();
+            pr.torque = Vec3::zeros();
             if self.update {
                 pr.shear = Vec3::zeros();
                 pr.fn_prev = 0.0;
@@ -1100,6 +1156,7 @@ impl PairCtx<'_> {
             None => (None, 0.0),
         };
         pr.force = out.map_or(Vec3::zeros(), |o| o.0);
+        pr.torque = out.map_or(Vec3::zeros(), |o| o.1);
         if self.update {
             pr.shear = shear;
             pr.fn_prev = fnorm;
