@@ -199,9 +199,12 @@ impl LocalDump {
             s.push_str(&format!("{} {}\n", format::g(d.lo[a], 6), format::g(d.hi[a], 6)));
         }
         s.push_str(&format!("ITEM: ENTRIES {} \n", self.labels.join(" ")));
+        // One line per contact: every referenced compute lists the same contacts in the same order.
+        let columns: Vec<(&Vec<Vec<f64>>, usize)> =
+            self.refs.iter().map(|(id, k)| (&tables[id.as_str()], k - 1)).collect();
         for row in 0..n {
-            for (id, k) in &self.refs {
-                s.push_str(&format::g(tables[id.as_str()][row][k - 1], 6));
+            for (table, k) in &columns {
+                s.push_str(&format::g(table[row][*k], 6));
                 s.push(' ');
             }
             s.push('\n');
