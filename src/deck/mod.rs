@@ -30,6 +30,9 @@ pub struct Options {
     pub log: Option<PathBuf>,
     /// Allow a progress bar (only shown when standard output is a terminal).
     pub progress: bool,
+    /// Nothing on standard output (the log file, if any, still gets everything): for decks run
+    /// in-process by `mcdem validate`.
+    pub quiet: bool,
 }
 
 /// Runs a deck file. Errors come back as `FILE:LINE: message`.
@@ -117,6 +120,7 @@ struct Deck {
     pair_locals: HashMap<String, local::PairLocal>,
     aves: Vec<Option<AveTime>>,
     progress: bool,
+    quiet: bool,
     summary: RunSummary,
     line_no: usize,
     scratch: Vec<f64>,
@@ -231,6 +235,7 @@ impl Deck {
             pair_locals: HashMap::new(),
             aves: Vec::new(),
             progress: opts.progress,
+            quiet: opts.quiet,
             summary: RunSummary::default(),
             line_no: 0,
             scratch: Vec::new(),
@@ -246,13 +251,17 @@ impl Deck {
     }
 
     fn say(&mut self, s: &str) {
-        println!("{s}");
+        if !self.quiet {
+            println!("{s}");
+        }
         self.logln(s);
     }
 
     fn warn(&mut self, s: &str) {
         let m = format!("WARNING: {s}");
-        println!("{m}");
+        if !self.quiet {
+            println!("{m}");
+        }
         self.logln(&m);
     }
 
@@ -1624,7 +1633,7 @@ impl Deck {
         self.write_dumps()?;
         let first = self.thermo_line()?;
         self.say(&first);
-        let bar = if self.progress && std::io::stdout().is_terminal() && nsteps >= 1000 {
+        let bar = if self.progress && !self.quiet && std::io::stdout().is_terminal() && nsteps >= 1000 {
             let pb = indicatif::ProgressBar::new(nsteps);
             pb.set_style(
                 indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps {per_sec} eta {eta}")
@@ -1643,6 +1652,7 @@ impl Deck {
             if let Some(line) = self.end_of_step_outputs(last)? {
                 match &bar {
                     Some(pb) => pb.println(&line),
+                    None if self.quiet => {}
                     None => println!("{line}"),
                 }
                 self.logln(&line);

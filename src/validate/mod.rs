@@ -6,9 +6,11 @@
 //!   `wall_time_s`, `particle_steps_per_s`, plus whether the case passed;
 //! - `report.md`: one section per case with its tables and notes.
 
+pub mod die;
 pub mod hard_cases;
 pub mod physics;
 pub mod plot;
+pub mod runner;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -37,6 +39,9 @@ pub struct ModelSummary {
     pub wall_time_s: f64,
     /// Particle-steps per second for dynamic runs; `None` for static or kernel-level cases.
     pub particle_steps_per_s: Option<f64>,
+    /// Further named figures (e.g. NRMSE per quantity and per reference kernel).
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub metrics: std::collections::BTreeMap<String, f64>,
 }
 
 /// Everything a case produced.
@@ -71,6 +76,8 @@ pub struct Options {
 pub fn cases() -> Vec<Case> {
     vec![
         Case { name: "physics_checks", run: physics::run },
+        Case { name: "single_particle", run: die::run_single },
+        Case { name: "bcc", run: die::run_bcc },
         Case { name: "hard_cases", run: hard_cases::run },
     ]
 }
@@ -150,10 +157,58 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
             r.wall_time_s
         );
     }
+    md.push_str(&speed_vs_error(opts, &results)?);
     for r in &results {
         let _ = write!(md, "\n## {}: {}\n\n{}\n", r.name, r.title, r.markdown);
     }
     let path = opts.out.join("report.md");
     std::fs::write(&path, md).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(results)
+}
+
+/// The speed-against-error picture: one point per case, model and setting that has both an NRMSE
+/// against its reference and a wall time, all measured in this run.
+fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, String> {
+    let mut series = Vec::new();
+    let mut table = String::from(
+        "\n## Speed against error\n\nEvery model run of this invocation that has an NRMSE against its reference \
+         (wall time includes setup; one point per model and setting).\n\n| case | model | NRMSE | wall time [s] | particle-steps/s |\n|---|---|---|---|---|\n",
+    );
+    for r in results {
+        for m in &r.models {
+            let Some(e) = m.nrmse else { continue };
+            let _ = writeln!(
+                table,
+                "| {} | {} | {:.3} % | {:.3} | {} |",
+                r.name,
+                m.model,
+                100.0 * e,
+                m.wall_time_s,
+                m.particle_steps_per_s.map(|v| format!("{v:.3e}")).unwrap_or_else(|| "-".into())
+            );
+            series.push(plot::Series {
+                label: format!("{} {}", r.name, m.model),
+                points: vec![(m.wall_time_s.max(1e-4), (100.0 * e).max(1e-4))],
+                markers: true,
+                thin: false,
+            });
+        }
+    }
+    if series.is_empty() {
+        return Ok(String::new());
+    }
+    let file = "speed_vs_error.png";
+    plot::draw(
+        &opts.out.join(file),
+        &plot::Chart {
+            title: "Speed against error (this run)",
+            x_label: "wall time [s]",
+            y_label: "NRMSE vs reference [%]",
+            log_x: true,
+            log_y: true,
+            series,
+        },
+    )?;
+    let _ = writeln!(table, "\n![speed against error]({file})");
+    Ok(table)
 }
