@@ -88,7 +88,14 @@ fn validate(quick: bool, cases: Vec<String>, out: PathBuf) -> Result<(), String>
     let opts = mcdem::validate::Options { quick, out: out.clone() };
     let results = mcdem::validate::run(&opts, &cases)?;
     let failed: Vec<_> = results.iter().filter(|r| !r.passed).map(|r| r.name).collect();
-    println!("{} passed, {} failed", results.len() - failed.len(), failed.len());
+    let targets: Vec<_> = results.iter().flat_map(|r| &r.targets).collect();
+    println!(
+        "{} passed, {} failed; paper targets met: {}/{}",
+        results.len() - failed.len(),
+        failed.len(),
+        targets.iter().filter(|t| t.met).count(),
+        targets.len()
+    );
     println!("report: {}", out.join("report.md").display());
     if failed.is_empty() {
         Ok(())

@@ -12,20 +12,44 @@ fn quick_validation_writes_the_report_contract() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let cases = summary["cases"].as_array().unwrap();
     let names: Vec<&str> = cases.iter().map(|c| c["name"].as_str().unwrap()).collect();
-    for expected in ["physics_checks", "hard_cases"] {
+    for expected in ["physics_checks", "single_particle", "bcc", "hard_cases"] {
         assert!(names.contains(&expected), "{expected} missing from {names:?}");
     }
     for c in cases {
         assert_eq!(c["passed"], Value::Bool(true), "{c}");
         assert!(c["wall_time_s"].as_f64().unwrap().is_finite());
         let name = c["name"].as_str().unwrap();
+        // Every model run of a case reports a finite wall time and, where it has a reference, a
+        // finite NRMSE; every target carries finite numbers.
+        for m in c["models"].as_array().unwrap() {
+            assert!(m["wall_time_s"].as_f64().unwrap().is_finite(), "{name}: {m}");
+            if let Some(e) = m["nrmse"].as_f64() {
+                assert!(e.is_finite() && e >= 0.0, "{name}: {m}");
+            }
+        }
+        for t in c["targets"].as_array().unwrap() {
+            assert!(
+                t["value"].as_f64().unwrap().is_finite() && t["limit"].as_f64().unwrap().is_finite(),
+                "{t}"
+            );
+        }
         let csv = std::fs::read_to_string(out.join(format!("{name}.csv"))).unwrap();
         let mut lines = csv.lines();
         assert_eq!(lines.next(), Some("case,model,params,x_name,x,quantity,value"));
         assert!(lines.next().is_some(), "{name}.csv has no rows");
     }
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("## hard_cases"));
+    assert!(md.contains("## hard_cases") && md.contains("## Speed against error"));
+    for png in ["single_particle_stress.png", "bcc_stress.png", "speed_vs_error.png"] {
+        assert!(out.join(png).is_file(), "{png} missing");
+    }
+    // The die cases carry their models, the nonlocal reference and the speed of each run.
+    let die = cases.iter().find(|c| c["name"] == "bcc").unwrap();
+    let models: Vec<&str> =
+        die["models"].as_array().unwrap().iter().map(|m| m["model"].as_str().unwrap()).collect();
+    for m in ["hertz", "standard_mc", "mc_advanced", "nonlocal_boussinesq"] {
+        assert!(models.contains(&m), "bcc: {m} missing from {models:?}");
+    }
 }
 
 #[test]
