@@ -147,7 +147,18 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
     for case in all.iter().filter(|c| only.is_empty() || only.iter().any(|n| n == c.name)) {
         eprintln!("validate: running {}", case.name);
         let t = Instant::now();
-        let mut r = (case.run)(opts)?;
+        // A case that cannot run (missing input, unstable model) is reported as failed with its
+        // message; the other cases still run.
+        let mut r = (case.run)(opts).unwrap_or_else(|e| {
+            eprintln!("validate: {}: {e}", case.name);
+            CaseResult {
+                name: case.name,
+                title: "did not run".into(),
+                passed: false,
+                markdown: format!("**Error:** {e}\n"),
+                ..Default::default()
+            }
+        });
         r.wall_time_s = t.elapsed().as_secs_f64();
         write_csv(&opts.out.join(format!("{}.csv", case.name)), &r.rows)?;
         eprintln!(
