@@ -54,6 +54,18 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Fit advanced MC (γ, MPR, and E where ν > 0.3) per Poisson ratio against the nonlocal reference (Fig. 5)
+    Calibrate {
+        /// CI size: 4× piston speed, ν = 0.5 only unless --nu is given, shorter searches
+        #[arg(long)]
+        quick: bool,
+        /// Poisson ratios (comma-separated); default 0.25,0.3,0.35,0.4,0.45,0.5
+        #[arg(long, value_delimiter = ',')]
+        nu: Vec<f64>,
+        /// Output directory (calibration.csv, .json, .md, .png)
+        #[arg(long, default_value = "validation/report")]
+        out: PathBuf,
+    },
     /// Run the validation suite and write the report
     Validate {
         /// Quick subset (CI)
@@ -135,6 +147,27 @@ fn nonlocal(scene: PathBuf, out: Option<PathBuf>, contacts: Option<PathBuf>) -> 
     Ok(())
 }
 
+fn calibrate(quick: bool, nus: Vec<f64>, out: PathBuf) -> Result<(), String> {
+    let fits = mcdem::validate::calibrate::run(&mcdem::validate::calibrate::Options {
+        quick,
+        nus,
+        out: out.clone(),
+    })?;
+    for f in &fits {
+        println!(
+            "nu {:.2}: gamma {:.3} MPR {:.3} E {:.4e} Pa NRMSE {:.2} % (Hertz {:.2} %)",
+            f.nu,
+            f.gamma,
+            f.mpr,
+            f.youngs_modulus_pa,
+            100.0 * f.nrmse,
+            100.0 * f.hertz_nrmse
+        );
+    }
+    println!("report: {}", out.join("calibration.md").display());
+    Ok(())
+}
+
 fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), String> {
     let report = mcdem::bench::run(mcdem::bench::Options { quick }, &mut |l| eprintln!("{l}"))?;
     print!("{}", mcdem::bench::table(&report));
@@ -153,6 +186,7 @@ fn main() -> ExitCode {
         Command::Run { deck, var, log, no_progress } => run(deck, var, log, no_progress),
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json } => bench(quick, json),
+        Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

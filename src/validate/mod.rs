@@ -6,6 +6,7 @@
 //!   `wall_time_s`, `particle_steps_per_s`, plus whether the case passed;
 //! - `report.md`: one section per case with its tables and notes.
 
+pub mod calibrate;
 pub mod die;
 pub mod hard_cases;
 pub mod physics;

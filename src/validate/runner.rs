@@ -29,10 +29,11 @@ pub fn plugin_exe() -> Option<PathBuf> {
     beside.into_iter().chain([tree]).find(|p| p.is_file())
 }
 
-struct Scratch(PathBuf);
+/// A private scratch directory, removed when dropped (also when a run fails).
+pub struct Scratch(pub PathBuf);
 
 impl Scratch {
-    fn new() -> Result<Self, String> {
+    pub fn new() -> Result<Self, String> {
         static NEXT: AtomicUsize = AtomicUsize::new(0);
         let dir = std::env::temp_dir().join(format!(
             "mcdem-validate-{}-{}",

@@ -36,15 +36,15 @@ const MPR_ADVANCED: f64 = 0.08;
 /// Standard-MC prefactors tried in increasing order; the highest that runs stable is used.
 const GAMMA_LADDER: [f64; 5] = [0.5, 0.75, 1.0, 1.25, 1.5];
 
-struct Setup {
-    nus: Vec<f64>,
+pub struct Setup {
+    pub nus: Vec<f64>,
     /// Steps of the example's stroke (sets the piston speed: 30000 = 0.1004 m/s).
-    stroke: u64,
-    every: u64,
-    nonlocal_steps: usize,
+    pub stroke: u64,
+    pub every: u64,
+    pub nonlocal_steps: usize,
 }
 
-fn setup(quick: bool) -> Setup {
+pub fn setup(quick: bool) -> Setup {
     if quick {
         // 4× the piston speed and two ν: a smoke test of the whole chain, not the paper's numbers.
         Setup { nus: vec![0.3, 0.5], stroke: 7500, every: 50, nonlocal_steps: 40 }
@@ -62,32 +62,49 @@ fn phi_of(z: f64) -> f64 {
     SOLID_VOLUME / (LX * LY * z)
 }
 
-/// (φ, σ [Pa]) of the second compression (stroke 3) from the deck's piston-force rows; the
-/// ave/time row at step s averages steps s − every + 1 … s, so its piston height is taken at the
-/// middle of that window.
-fn second_compression(run: &DeckRun, s: &Setup) -> Vec<(f64, f64)> {
+/// A σ–φ curve: (φ, piston stress [Pa]).
+pub type Curve = Vec<(f64, f64)>;
+
+/// The compression stroke of a one-stroke run as (φ, σ); the ave/time row at step s averages steps
+/// s − every + 1 … s, so its piston height is taken at the middle of that window.
+fn compression(run: &DeckRun, s: &Setup) -> Curve {
     let n = stroke_steps(s.stroke) as f64;
     let speed = (Z0 - Z_END) / (n * DT);
     run.table
         .iter()
         .filter_map(|r| {
             let step = r[0] - 0.5 * (s.every as f64 - 1.0);
-            let into = step - 2.0 * n;
-            (into >= 0.0 && into <= n).then(|| (phi_of(Z0 - speed * into * DT), r[3] / (LX * LY)))
+            (step >= 0.0 && step <= n).then(|| (phi_of(Z0 - speed * step * DT), r[3] / (LX * LY)))
         })
         .collect()
 }
 
-fn dem(
+fn deck_vars(
     law: &str,
     gamma: f64,
     mpr: f64,
     nu: f64,
     s: &Setup,
-    state: Option<&Path>,
     strokes: u32,
-) -> Result<DeckRun, String> {
-    let mut vars = vec![
+) -> Vec<(&'static str, String)> {
+    deck_vars_e(law, gamma, mpr, nu, E_HYDROGEL, s, strokes)
+}
+
+/// The hydrogel's Young's modulus [Pa] (paper Table 1).
+pub const E_HYDROGEL: f64 = 23.3e3;
+
+#[allow(clippy::too_many_arguments)]
+fn deck_vars_e(
+    law: &str,
+    gamma: f64,
+    mpr: f64,
+    nu: f64,
+    e: f64,
+    s: &Setup,
+    strokes: u32,
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("E", e.to_string()),
         ("law", law.to_string()),
         ("gamma", gamma.to_string()),
         ("mpr", mpr.to_string()),
@@ -96,17 +113,90 @@ fn dem(
         ("zend", Z_END.to_string()),
         ("strokes", strokes.to_string()),
         ("every", s.every.to_string()),
-    ];
-    if let Some(p) = state {
-        vars.push(("statestroke", "2".into()));
-        vars.push(("statefile", p.display().to_string()));
+    ]
+}
+
+/// The packing at the start of the second compression: the example's packing run through one
+/// compression–decompression cycle with Hertz at Poisson ratio `nu`. Writes `dir/state.dump`
+/// (for the nonlocal solver) and `dir/state.data` (a LIGGGHTS data file the DEM restarts from).
+pub fn start_state(
+    nu: f64,
+    s: &Setup,
+    dir: &Path,
+) -> Result<(std::path::PathBuf, std::path::PathBuf), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let dump = dir.join("state.dump");
+    let mut vars = deck_vars("1", 1.0, 0.0, nu, s, 2);
+    vars.push(("statestroke", "2".into()));
+    vars.push(("statefile", dump.display().to_string()));
+    runner::run_rust("hydrogel.in", &vars)?;
+    let frames = crate::outputs::read_dump(&dump)?;
+    let f = frames.last().ok_or_else(|| format!("{}: no frame", dump.display()))?;
+    let col = |n: &str| f.column(n).ok_or_else(|| format!("{}: no column {n}", dump.display()));
+    let (ci, ct, cr) = (col("id")?, col("type")?, col("radius")?);
+    let (cx, cy, cz) = (col("x")?, col("y")?, col("z")?);
+    let (cvx, cvy, cvz) = (col("vx")?, col("vy")?, col("vz")?);
+    let mut text = format!(
+        "LIGGGHTS data file: hydrogel packing at the start of the second compression (Hertz, nu = {nu})\n\n\
+         {} atoms\n\n2 atom types\n\n-0.0101 0.1701 xlo xhi\n-0.0101 0.1701 ylo yhi\n-0.0101 0.4101 zlo zhi\n\nAtoms\n\n",
+        f.rows.len()
+    );
+    for r in &f.rows {
+        let _ = writeln!(
+            text,
+            "{} {} {:.12e} 11.5 {:.12e} {:.12e} {:.12e}",
+            r[ci],
+            r[ct],
+            2.0 * r[cr],
+            r[cx],
+            r[cy],
+            r[cz]
+        );
     }
-    runner::run_rust("hydrogel.in", &vars)
+    text.push_str("\nVelocities\n\n");
+    for r in &f.rows {
+        let _ = writeln!(text, "{} {:.12e} {:.12e} {:.12e} 0 0 0", r[ci], r[cvx], r[cvy], r[cvz]);
+    }
+    let data = dir.join("state.data");
+    std::fs::write(&data, text).map_err(|e| format!("cannot write {}: {e}", data.display()))?;
+    Ok((dump, data))
+}
+
+/// One compression stroke of the DEM from the start state `data` (gravity on, as the deck).
+pub fn compress(
+    law: &str,
+    gamma: f64,
+    mpr: f64,
+    nu: f64,
+    s: &Setup,
+    data: &Path,
+) -> Result<(Curve, DeckRun), String> {
+    compress_e(law, gamma, mpr, nu, E_HYDROGEL, s, data)
+}
+
+/// [`compress`] with the particles' Young's modulus `e` [Pa] (the calibration's third parameter).
+#[allow(clippy::too_many_arguments)]
+pub fn compress_e(
+    law: &str,
+    gamma: f64,
+    mpr: f64,
+    nu: f64,
+    e: f64,
+    s: &Setup,
+    data: &Path,
+) -> Result<(Curve, DeckRun), String> {
+    let mut vars = deck_vars_e(law, gamma, mpr, nu, e, s, 1);
+    vars.push(("data", data.display().to_string()));
+    let run = runner::run_rust("hydrogel.in", &vars)?;
+    if run.table.iter().any(|r| r.iter().any(|v| !v.is_finite())) {
+        return Err(format!("law {law} gamma {gamma} mpr {mpr}: non-finite piston force"));
+    }
+    Ok((compression(&run, s), run))
 }
 
 /// The nonlocal reference from the state file: walls of the box, piston from its start height
 /// down to `Z_END`, gravity off.
-fn reference(
+pub fn reference(
     state: &Path,
     nu: f64,
     kind: KernelKind,
@@ -148,7 +238,7 @@ fn reference(
 }
 
 /// NRMSE of `model` against `reference` at the reference points with φ ≥ `PHI_MIN`.
-fn error(model: &[(f64, f64)], reference: &[(f64, f64)]) -> f64 {
+pub fn error(model: &[(f64, f64)], reference: &[(f64, f64)]) -> f64 {
     let (mut m, mut r) = (Vec::new(), Vec::new());
     for &(phi, s) in reference.iter().filter(|p| p.0 >= PHI_MIN) {
         if let Some(v) = runner::interpolate(model, phi) {
@@ -187,28 +277,33 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
     } else {
         KernelKind::Boussinesq
     };
-    let scratch = std::env::temp_dir().join(format!("mcdem-uniaxial-{}", std::process::id()));
-    std::fs::create_dir_all(&scratch).map_err(|e| format!("cannot create {}: {e}", scratch.display()))?;
+    let scratch = runner::Scratch::new()?;
+    let scratch = &scratch.0;
+    let n = stroke_steps(s.stroke);
     let mut rows = Vec::new();
     let mut models = Vec::new();
     let mut md = format!(
-        "514 spheres (Debian example), piston {Z0} → {Z_END} m (φ 0.59 → 0.85) and back, twice, {} steps per stroke \
-         ({:.4} m/s), dt = {DT} s; the second compression is evaluated. Stress = piston force / (L_x L_y). \
-         Reference: nonlocal, kernel `{}`, {} load steps from the Hertz run's state at the start of the \
-         second compression, gravity off. NRMSE over the reference points with φ ≥ {PHI_MIN}.{}\n\n\
-         | ν | nonlocal [s] | Hertz NRMSE | standard MC γ_max | standard MC NRMSE | advanced MC (γ {GAMMA_ADVANCED}, MPR {MPR_ADVANCED}) NRMSE | ordering adv < std < Hertz |\n|---|---|---|---|---|---|---|\n",
-        stroke_steps(s.stroke),
-        (Z0 - Z_END) / (stroke_steps(s.stroke) as f64 * DT),
+        "514 spheres (Debian example). Each ν: one Hertz compression–decompression cycle gives the packing at \
+         the start of the second compression (state written by the deck); from that state every model runs the \
+         second compression, piston {Z0} → {Z_END} m (φ 0.59 → 0.85) in {n} steps ({:.4} m/s, dt = {DT} s, \
+         gravity on), and the nonlocal reference (kernel `{}`, {} load steps, gravity off) starts from the same \
+         state. One common start isolates the contact law from the path history. Stress = piston force / \
+         (L_x L_y); NRMSE over the reference points with φ ≥ {PHI_MIN}. Standard MC: γ climbs the ladder \
+         {GAMMA_LADDER:?} until a run stops unstable; the last stable γ is reported. Advanced MC: γ = \
+         {GAMMA_ADVANCED}, MPR = {MPR_ADVANCED} (uncalibrated; `mcdem calibrate` fits them).{}\n\n\
+         | ν | nonlocal [s] | Hertz NRMSE | standard MC γ_max | standard MC NRMSE | advanced MC NRMSE | advanced < standard < Hertz |\n|---|---|---|---|---|---|---|\n",
+        (Z0 - Z_END) / (n as f64 * DT),
         kind.name(),
         s.nonlocal_steps,
         if opts.quick { " Quick mode: 4× piston speed, two ν — a smoke test, not the paper's numbers." } else { "" }
     );
     let mut targets = Vec::new();
     let mut nrmse_rows = Vec::new();
+    let mut unstable = Vec::new();
     for &nu in &s.nus {
-        let state = scratch.join(format!("state_nu{nu}.dump"));
-        let hertz = dem("1", 1.0, 0.0, nu, &s, Some(&state), 3)?;
-        let (refc, ref_secs) = reference(&state, nu, kind, s.nonlocal_steps)?;
+        let dir = scratch.join(format!("nu{nu}"));
+        let (dump, data) = start_state(nu, &s, &dir)?;
+        let (refc, ref_secs) = reference(&dump, nu, kind, s.nonlocal_steps)?;
         push_curve(&mut rows, &format!("nonlocal_{}", kind.name()), format!("nu={nu}"), &refc);
         models.push(ModelSummary {
             model: format!("nonlocal_{} nu={nu}", kind.name()),
@@ -217,49 +312,40 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             particle_steps_per_s: None,
             metrics: Default::default(),
         });
-        let hc = second_compression(&hertz, &s);
+        let summary = |models: &mut Vec<ModelSummary>, name: String, e: f64, run: &DeckRun| {
+            models.push(ModelSummary {
+                model: name,
+                nrmse: Some(e),
+                wall_time_s: run.wall_time_s,
+                particle_steps_per_s: Some(run.particle_steps_per_s),
+                metrics: Default::default(),
+            })
+        };
+        let (hc, hrun) = compress("1", 1.0, 0.0, nu, &s, &data)?;
         let he = error(&hc, &refc);
         push_curve(&mut rows, "hertz", format!("nu={nu}"), &hc);
-        models.push(ModelSummary {
-            model: format!("hertz nu={nu}"),
-            nrmse: Some(he),
-            wall_time_s: hertz.wall_time_s,
-            particle_steps_per_s: Some(hertz.particle_steps_per_s),
-            metrics: Default::default(),
-        });
-        // Highest stable standard-MC γ: probe the first compression stroke up the ladder.
-        let mut gamma_max = None;
+        summary(&mut models, format!("hertz nu={nu}"), he, &hrun);
+        // Highest stable standard-MC γ of the ladder; every stable rung is a valid run.
+        let mut best: Option<(f64, Curve, DeckRun)> = None;
         for g in GAMMA_LADDER {
-            match dem("2", g, 0.0, nu, &s, None, 1) {
-                Ok(r) if r.table.iter().all(|row| row.iter().all(|v| v.is_finite())) => gamma_max = Some(g),
-                _ => break,
-            }
-        }
-        let (se, std_run) = match gamma_max {
-            Some(g) => {
-                let r = dem("2", g, 0.0, nu, &s, None, 3);
-                match r {
-                    Ok(r) => {
-                        let c = second_compression(&r, &s);
-                        push_curve(&mut rows, "standard_mc", format!("nu={nu} gamma={g}"), &c);
-                        (error(&c, &refc), Some(r))
-                    }
-                    Err(_) => (f64::NAN, None),
+            match compress("2", g, 0.0, nu, &s, &data) {
+                Ok((c, r)) => best = Some((g, c, r)),
+                Err(e) => {
+                    unstable.push(format!("ν = {nu}, standard MC γ = {g}: {e}"));
+                    break;
                 }
             }
-            None => (f64::NAN, None),
-        };
-        if let Some(r) = &std_run {
-            models.push(ModelSummary {
-                model: format!("standard_mc nu={nu} gamma={}", gamma_max.unwrap_or(f64::NAN)),
-                nrmse: Some(se),
-                wall_time_s: r.wall_time_s,
-                particle_steps_per_s: Some(r.particle_steps_per_s),
-                metrics: Default::default(),
-            });
         }
-        let adv = dem("0", GAMMA_ADVANCED, MPR_ADVANCED, nu, &s, None, 3)?;
-        let ac = second_compression(&adv, &s);
+        let (gamma_max, se, sc) = match &best {
+            Some((g, c, r)) => {
+                let e = error(c, &refc);
+                push_curve(&mut rows, "standard_mc", format!("nu={nu} gamma={g}"), c);
+                summary(&mut models, format!("standard_mc nu={nu} gamma={g}"), e, r);
+                (Some(*g), e, c.clone())
+            }
+            None => (None, f64::NAN, Curve::new()),
+        };
+        let (ac, arun) = compress("0", GAMMA_ADVANCED, MPR_ADVANCED, nu, &s, &data)?;
         let ae = error(&ac, &refc);
         push_curve(
             &mut rows,
@@ -267,18 +353,12 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             format!("nu={nu} gamma={GAMMA_ADVANCED} mpr={MPR_ADVANCED}"),
             &ac,
         );
-        models.push(ModelSummary {
-            model: format!("mc_advanced nu={nu}"),
-            nrmse: Some(ae),
-            wall_time_s: adv.wall_time_s,
-            particle_steps_per_s: Some(adv.particle_steps_per_s),
-            metrics: Default::default(),
-        });
+        summary(&mut models, format!("mc_advanced nu={nu}"), ae, &arun);
         let ordered = ae < se && se < he;
         targets.push(Target {
             name: format!("nu = {nu}: NRMSE advanced MC < standard MC < Hertz"),
             value: ae,
-            limit: se.min(he),
+            limit: if se.is_finite() { se.min(he) } else { he },
             met: ordered,
         });
         let _ = writeln!(
@@ -292,44 +372,35 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         );
         nrmse_rows.push((nu, he, se, ae));
         let file = format!("uniaxial_nu{nu}.png");
-        let series = vec![
-            super::plot::Series {
-                label: format!("nonlocal {}", kind.name()),
-                points: refc.clone(),
-                markers: true,
-                thin: false,
-            },
-            super::plot::Series { label: "hertz".into(), points: hc, markers: false, thin: false },
-            super::plot::Series {
-                label: format!("standard MC γ={}", gamma_max.unwrap_or(f64::NAN)),
-                points: rows
-                    .iter()
-                    .filter(|r| r.model == "standard_mc" && r.params.starts_with(&format!("nu={nu} ")))
-                    .map(|r| (r.x, r.value))
-                    .collect(),
-                markers: false,
-                thin: false,
-            },
-            super::plot::Series { label: "advanced MC".into(), points: ac, markers: false, thin: false },
-        ];
+        let line = |label: String, points: Curve, markers: bool| super::plot::Series {
+            label,
+            points,
+            markers,
+            thin: false,
+        };
         super::plot::draw(
             &opts.out.join(&file),
             &super::plot::Chart {
-                title: &format!("514 hydrogel spheres, 2nd compression, ν = {nu}"),
+                title: &format!("514 hydrogel spheres, second compression, ν = {nu}"),
                 x_label: "solid volume fraction φ",
                 y_label: "piston stress [Pa]",
                 log_x: false,
                 log_y: true,
-                series,
+                series: vec![
+                    line(format!("nonlocal {}", kind.name()), refc.clone(), true),
+                    line("hertz".into(), hc, false),
+                    line(format!("standard MC γ = {}", gamma_max.unwrap_or(f64::NAN)), sc, false),
+                    line("advanced MC".into(), ac, false),
+                ],
             },
         )?;
         let _ = writeln!(md, "\n![ν = {nu}]({file})\n");
     }
-    let _ = std::fs::remove_dir_all(&scratch);
+    for u in &unstable {
+        let _ = writeln!(md, "- unstable (ends the ladder): {u}");
+    }
     // Fig. 4 analogue: NRMSE against ν.
-    let pick = |k: usize| -> Vec<(f64, f64)> {
-        nrmse_rows.iter().map(|r| (r.0, 100.0 * [r.1, r.2, r.3][k])).collect()
-    };
+    let pick = |k: usize| -> Curve { nrmse_rows.iter().map(|r| (r.0, 100.0 * [r.1, r.2, r.3][k])).collect() };
     let file = "uniaxial_nrmse_vs_nu.png";
     super::plot::draw(
         &opts.out.join(file),
@@ -351,11 +422,12 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
                 .collect(),
         },
     )?;
-    let _ = writeln!(md, "![NRMSE vs ν]({file})");
+    let _ = writeln!(md, "\n![NRMSE vs ν]({file})");
     Ok(CaseResult {
         name: "uniaxial",
         title: "514-particle uniaxial compression, σ–φ and NRMSE vs ν (Figs. 1–4)".into(),
-        // Checks: every run finished with finite curves (an unstable run stops the case with its error).
+        // Checks: every run finished with finite curves and the reference converged (a failure
+        // stops the case with its message).
         passed: true,
         targets,
         rows,
