@@ -67,3 +67,19 @@ fn unknown_case_is_a_clear_error() {
     let err = String::from_utf8(out).unwrap();
     assert!(err.contains("unknown case 'nope'") && err.contains("hard_cases"), "{err}");
 }
+
+#[test]
+fn calibrate_rejects_a_poisson_ratio_outside_the_physical_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("mcdem")
+        .unwrap()
+        .args(["calibrate", "--nu", "0.3,0.7", "--out"])
+        .arg(dir.path())
+        .assert()
+        .code(2)
+        .get_output()
+        .stderr
+        .clone();
+    let err = String::from_utf8(out).unwrap();
+    assert!(err.contains("Poisson ratio 0.7 outside [0, 0.5]"), "{err}");
+}

@@ -10,6 +10,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use rayon::prelude::*;
 use serde_json::json;
 
 use super::runner::{self, DeckRun};
@@ -265,6 +266,18 @@ fn push_curve(rows: &mut Vec<Row>, model: &str, params: String, curve: &[(f64, f
     }));
 }
 
+/// What one ν contributes to the case.
+#[derive(Default)]
+struct NuResult {
+    rows: Vec<Row>,
+    models: Vec<ModelSummary>,
+    targets: Vec<Target>,
+    unstable: Vec<String>,
+    md: String,
+    /// (ν, Hertz, standard MC, advanced MC) NRMSE.
+    nrmse: (f64, f64, f64, f64),
+}
+
 pub fn run(opts: &Options) -> Result<CaseResult, String> {
     let s = setup(opts.quick);
     if !Path::new(EXAMPLE).join("data/input.data").exists() {
@@ -297,14 +310,15 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         s.nonlocal_steps,
         if opts.quick { " Quick mode: 4× piston speed, two ν — a smoke test, not the paper's numbers." } else { "" }
     );
-    let mut targets = Vec::new();
-    let mut nrmse_rows = Vec::new();
-    let mut unstable = Vec::new();
-    for &nu in &s.nus {
+    // One ν per core: each ν is an independent chain (start state, reference, models).
+    let per_nu = |nu: f64| -> Result<NuResult, String> {
+        let mut r = NuResult::default();
+        let (rows, models, targets, unstable, md) =
+            (&mut r.rows, &mut r.models, &mut r.targets, &mut r.unstable, &mut r.md);
         let dir = scratch.join(format!("nu{nu}"));
         let (dump, data) = start_state(nu, &s, &dir)?;
         let (refc, ref_secs) = reference(&dump, nu, kind, s.nonlocal_steps)?;
-        push_curve(&mut rows, &format!("nonlocal_{}", kind.name()), format!("nu={nu}"), &refc);
+        push_curve(rows, &format!("nonlocal_{}", kind.name()), format!("nu={nu}"), &refc);
         models.push(ModelSummary {
             model: format!("nonlocal_{} nu={nu}", kind.name()),
             nrmse: None,
@@ -323,8 +337,8 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         };
         let (hc, hrun) = compress("1", 1.0, 0.0, nu, &s, &data)?;
         let he = error(&hc, &refc);
-        push_curve(&mut rows, "hertz", format!("nu={nu}"), &hc);
-        summary(&mut models, format!("hertz nu={nu}"), he, &hrun);
+        push_curve(rows, "hertz", format!("nu={nu}"), &hc);
+        summary(models, format!("hertz nu={nu}"), he, &hrun);
         // Highest stable standard-MC γ of the ladder; every stable rung is a valid run.
         let mut best: Option<(f64, Curve, DeckRun)> = None;
         for g in GAMMA_LADDER {
@@ -339,21 +353,16 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         let (gamma_max, se, sc) = match &best {
             Some((g, c, r)) => {
                 let e = error(c, &refc);
-                push_curve(&mut rows, "standard_mc", format!("nu={nu} gamma={g}"), c);
-                summary(&mut models, format!("standard_mc nu={nu} gamma={g}"), e, r);
+                push_curve(rows, "standard_mc", format!("nu={nu} gamma={g}"), c);
+                summary(models, format!("standard_mc nu={nu} gamma={g}"), e, r);
                 (Some(*g), e, c.clone())
             }
             None => (None, f64::NAN, Curve::new()),
         };
         let (ac, arun) = compress("0", GAMMA_ADVANCED, MPR_ADVANCED, nu, &s, &data)?;
         let ae = error(&ac, &refc);
-        push_curve(
-            &mut rows,
-            "mc_advanced",
-            format!("nu={nu} gamma={GAMMA_ADVANCED} mpr={MPR_ADVANCED}"),
-            &ac,
-        );
-        summary(&mut models, format!("mc_advanced nu={nu}"), ae, &arun);
+        push_curve(rows, "mc_advanced", format!("nu={nu} gamma={GAMMA_ADVANCED} mpr={MPR_ADVANCED}"), &ac);
+        summary(models, format!("mc_advanced nu={nu}"), ae, &arun);
         let ordered = ae < se && se < he;
         targets.push(Target {
             name: format!("nu = {nu}: NRMSE advanced MC < standard MC < Hertz"),
@@ -370,7 +379,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             100.0 * ae,
             if ordered { "yes" } else { "NO" }
         );
-        nrmse_rows.push((nu, he, se, ae));
+        r.nrmse = (nu, he, se, ae);
         let file = format!("uniaxial_nu{nu}.png");
         let line = |label: String, points: Curve, markers: bool| super::plot::Series {
             label,
@@ -395,6 +404,18 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             },
         )?;
         let _ = writeln!(md, "\n![ν = {nu}]({file})\n");
+        Ok(r)
+    };
+    let results: Vec<Result<NuResult, String>> = s.nus.par_iter().map(|&nu| per_nu(nu)).collect();
+    let (mut targets, mut nrmse_rows, mut unstable) = (Vec::new(), Vec::new(), Vec::new());
+    for r in results {
+        let r = r?;
+        rows.extend(r.rows);
+        models.extend(r.models);
+        targets.extend(r.targets);
+        unstable.extend(r.unstable);
+        md.push_str(&r.md);
+        nrmse_rows.push(r.nrmse);
     }
     for u in &unstable {
         let _ = writeln!(md, "- unstable (ends the ladder): {u}");
