@@ -1052,7 +1052,16 @@ mod tests {
 
     #[test]
     fn jacobian_matches_finite_differences() {
-        let s = cluster(KernelKind::Boussinesq);
+        jacobian_check(KernelKind::Boussinesq);
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences_with_the_sphere_kernel() {
+        jacobian_check(KernelKind::Sphere);
+    }
+
+    fn jacobian_check(kind: KernelKind) {
+        let s = cluster(kind);
         let nc = s.contacts.len();
         assert!(nc >= 8, "cluster has only {nc} contacts");
         let n = s.x.len();
