@@ -18,8 +18,8 @@
 //!     w_n = (1+ν) [2(1−ν) n² + ν n + 2ν − 1] / ((n−1) (n² + (2ν+1) n + ν + 1))
 //! ```
 //!
-//! (w_0 = 1−2ν is Lamé's uniform pressure; the formula is checked against an independent
-//! Cartesian derivation in the tests). A unit inward point force at the pole has p_n = (2n+1)/(4πR²),
+//! (w_0 = 1−2ν is Lamé's uniform pressure; a test re-solves the two traction conditions
+//! numerically for each n). A unit inward point force at the pole has p_n = (2n+1)/(4πR²),
 //! so its inward displacement in units P/(E R) is g(μ) = Σ d_n P_n(μ), d_n = (2n+1) w_n / (4π).
 //! The n = 1 term carries the net force and has no solution on its own: the load is balanced by
 //! its own n = 1 component (the normal traction −3P cos θ/(4πR²)), which leaves the centre fixed
@@ -47,8 +47,8 @@
 //! pair. For a particle in equilibrium (Σ_k P_k e_k = 0) the n = 1 reactions of all its loads
 //! cancel, so the superposition Σ_k g(μ_ck) P_k is the exact displacement of the sphere, with the
 //! centre fixed (the d_1 translations cancel too). Charging every contact with its whole pair
-//! instead would count each load twice away from its antipode (a sphere between two plates would
-//! bulge twice as much at its equator). This is also how the Boussinesq kernel is used: SPEC §4.1
+//! instead would count each load twice away from its antipode (a contact on the equator of a
+//! sphere pressed by two plates would see twice the plates' bulge). This is also how the Boussinesq kernel is used: SPEC §4.1
 //! compares its two-load sum with the sphere's pair values. Consequences:
 //! - θ → 0 (coincident contacts): g has the Boussinesq 1/chord singularity (a/(2s) is exactly
 //!   (1−ν²)P/(πEρ)) and, for ν < ½, a logarithmic one (−b ln s, from the tangential part of the
@@ -60,11 +60,12 @@
 //!   i.e. g_reg = 0: for an equilibrated particle Σ_{k≠c} d_1 μ_ck P_k = −d_1 P_c, so the relation
 //!   without a self term then equals the exact superposition, self term included. (For ν = ½ this
 //!   is unambiguous; for ν < ½ the scale inside the logarithm is a convention, ln s = ln(ρ/2R).)
-//! - θ → π (c opposite k): g is smooth and finite. G(π) = g_0(π) + g_reg (g_0: d_1 = 0) is the
-//!   diametric pair's field at the antipode with the antipodal point load's singular (Hertz) part
-//!   removed, so a sphere loaded at two opposite contacts gets its exact pair solution.
+//! - θ → π (c opposite k): g is smooth and finite. With g⁰, g⁰_reg the values for d_1 = 0,
+//!   G(π) = g⁰(π) − d_1 = g⁰(π) + g⁰_reg: the diametric pair's field at the antipode with the
+//!   antipodal point load's singular (Hertz) part removed, so a sphere loaded at two opposite
+//!   contacts gets its exact pair solution.
 //!
-//! **Verification** (units P/(E R), diametric pair, converged to < 1e−9): θ = 90°: −0.16168
+//! **Verification** (units P/(E R), diametric pair, accurate to < 1e−9): θ = 90°: −0.16168
 //! (ν = 0.3), −0.20721 (ν = 0.5); θ = 60° or 120°: −0.07919 (ν = 0.3), −0.12488 (ν = 0.5).
 //! SPEC §4.1 prints −0.158, −0.204, −0.084, −0.129: these are the same series (same d_n) summed
 //! without acceleration and cut at n_max ≈ 3000–4000 with n_max ≡ 4 (mod 12), e.g. 3400, where
@@ -380,7 +381,7 @@ pub fn sphere_unit_displacement(mu: f64, nu: f64) -> (f64, f64) {
     (g, dg_ds * (-0.25 / s))
 }
 
-/// Inward surface displacement at polar angle `theta` [rad] of a sphere loaded by a diametric pair
+/// Inward surface displacement at polar angle `theta` (radians) of a sphere loaded by a diametric pair
 /// of unit compressive point forces at the poles, in units P/(E R) (the SPEC §4.1 orientation case):
 /// g(cos θ) + g(−cos θ).
 pub fn sphere_pair_displacement(theta: f64, nu: f64) -> f64 {
