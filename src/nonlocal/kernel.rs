@@ -6,9 +6,76 @@
 //! unit vectors from the centre toward the two contacts. The solver needs G and dG/dμ: the
 //! directions of particle–particle contacts move with the centres, and the Newton Jacobian is
 //! exact only with that derivative.
+//!
+//! # The `sphere` kernel (finite elastic sphere, SPEC §4.1)
+//!
+//! **Legendre series.** A normal surface traction σ_rr = −p_n P_n(cos θ), σ_rθ = 0 on a solid
+//! sphere of radius R (n ≠ 1) is carried by the two regular axisymmetric displacement families
+//! u = ∇φ_n and u = (n+5−4ν) r²∇φ_n − [(1−2ν)(4n+2)+2n] x φ_n, φ_n = rⁿ P_n (Lamé/Love). Solving
+//! the two traction conditions gives the inward surface displacement (p_n R / E) w_n P_n with
+//!
+//! ```text
+//!     w_n = (1+ν) [2(1−ν) n² + ν n + 2ν − 1] / ((n−1) (n² + (2ν+1) n + ν + 1))
+//! ```
+//!
+//! (w_0 = 1−2ν is Lamé's uniform pressure; a test re-solves the two traction conditions
+//! numerically for each n). A unit inward point force at the pole has p_n = (2n+1)/(4πR²),
+//! so its inward displacement in units P/(E R) is g(μ) = Σ d_n P_n(μ), d_n = (2n+1) w_n / (4π).
+//! The n = 1 term carries the net force and has no solution on its own: the load is balanced by
+//! its own n = 1 component (the normal traction −3P cos θ/(4πR²)), which leaves the centre fixed
+//! and no n = 1 deformation; what remains free is a rigid translation along the load axis,
+//! u_r = d_1 cos θ, fixed below. A diametric pair of unit loads (the SPEC §4.1 verification case)
+//! is exactly w(θ) = g(cos θ) + g(−cos θ): the odd terms, d_1 included, cancel and the even ones
+//! double.
+//!
+//! **Summation.** d_n → (1−ν²)/π, so the series diverges at the pole and converges only
+//! conditionally elsewhere (its partial sums oscillate with amplitude ∝ n^−½). The asymptotic
+//! expansion d_n = a + b/n + c/(n(n+1)) + e/(n(n+1)(n+2)) + O(n⁻⁴) with
+//! a = (1−ν²)/π, b = (1+ν)(1−2ν)²/(2π), c = −(1+ν)(16ν³−12ν²−5ν+2)/(4π),
+//! e = (1+ν)(32ν⁴−32ν³−10ν²+13ν+1)/(4π) is subtracted and summed in closed form
+//! (s = sin(θ/2), μ = 1 − 2s²): Σ_{n≥0} P_n = 1/(2s) (the Boussinesq 1/chord term: a/(2s) per
+//! P/(E R) is exactly (1−ν²)P/(πEρ)), Σ_{n≥1} P_n/n = −ln(s(1+s)),
+//! Σ_{n≥1} P_n/(n(n+1)) = 1 − 2 ln(1+s), Σ_{n≥1} P_n/(n(n+1)(n+2)) = s² ln s − (1+s²) ln(1+s) + s + ¼.
+//! The remainder, with O(n⁻⁴) coefficients, is summed to [`SPHERE_TERMS`] terms (truncation
+//! < 1e−10) with its derivative, once per ν, on a uniform grid of [`SPHERE_GRID`] intervals in s,
+//! and evaluated by cubic Hermite interpolation (C¹); the singular part is evaluated analytically.
+//! Tables are built lazily, cached per ν (bit pattern) for the life of the process, with a
+//! per-thread last-used entry in front, so an evaluation is a lookup, one cubic and three
+//! logarithms, with no allocation.
+//!
+//! **Kernel.** G(μ) = γ g(μ) / (E R): the field of the load at k alone, not of k's diametric
+//! pair. For a particle in equilibrium (Σ_k P_k e_k = 0) the n = 1 reactions of all its loads
+//! cancel, so the superposition Σ_k g(μ_ck) P_k is the exact displacement of the sphere, with the
+//! centre fixed (the d_1 translations cancel too). Charging every contact with its whole pair
+//! instead would count each load twice away from its antipode (a contact on the equator of a
+//! sphere pressed by two plates would see twice the plates' bulge). This is also how the Boussinesq kernel is used: SPEC §4.1
+//! compares its two-load sum with the sphere's pair values. Consequences:
+//! - θ → 0 (coincident contacts): g has the Boussinesq 1/chord singularity (a/(2s) is exactly
+//!   (1−ν²)P/(πEρ)) and, for ν < ½, a logarithmic one (−b ln s, from the tangential part of the
+//!   point-load field on a curved surface). As for the Boussinesq kernel, the load's own contact is
+//!   the local Hertz term: contacts closer than [`MIN_HALF_ANGLE_SINE`] contribute nothing.
+//! - The self term. The exact approach at c also contains the regular part of c's own field at
+//!   c, g_reg = lim_{s→0} [g − a/(2s) + b ln s] (times P_c), for which the SPEC relation has no
+//!   term. The translation d_1 is chosen as −g_reg (d_1 = 0.3170 for ν = ½, 0.5034 for ν = 0.3),
+//!   i.e. g_reg = 0: for an equilibrated particle Σ_{k≠c} d_1 μ_ck P_k = −d_1 P_c, so the relation
+//!   without a self term then equals the exact superposition, self term included. (For ν = ½ this
+//!   is unambiguous; for ν < ½ the scale inside the logarithm is a convention, ln s = ln(ρ/2R).)
+//! - θ → π (c opposite k): g is smooth and finite. With g⁰, g⁰_reg the values for d_1 = 0,
+//!   G(π) = g⁰(π) − d_1 = g⁰(π) + g⁰_reg: the diametric pair's field at the antipode with the
+//!   antipodal point load's singular (Hertz) part removed, so a sphere loaded at two opposite
+//!   contacts gets its exact pair solution.
+//!
+//! **Verification** (units P/(E R), diametric pair, accurate to < 1e−9): θ = 90°: −0.16168
+//! (ν = 0.3), −0.20721 (ν = 0.5); θ = 60° or 120°: −0.07919 (ν = 0.3), −0.12488 (ν = 0.5).
+//! SPEC §4.1 prints −0.158, −0.204, −0.084, −0.129: these are the same series (same d_n) summed
+//! without acceleration and cut at n_max ≈ 3000–4000 with n_max ≡ 4 (mod 12), e.g. 3400, where
+//! the oscillating partial sums are still 3–5e−3 off the limit (both are tests below).
 
+use std::cell::Cell;
+use std::f64::consts::PI;
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Mutex;
 
 use crate::physics::brodu2015::{bracket_on_sphere, compliance_prefactor};
 
@@ -20,7 +87,7 @@ pub const MIN_HALF_ANGLE_SINE: f64 = 1e-6;
 /// Which kernel G to use (SPEC §4.1 **[option `kernel`]**).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum KernelKind {
-    /// Exact finite elastic sphere (Legendre series). Not implemented yet: selecting it is an error.
+    /// Exact finite elastic sphere (Legendre series, see the module documentation).
     Sphere,
     /// Boussinesq half-space, the Eq. 2 kernel with γ = 1 (the parity partner of standard MC).
     Boussinesq,
@@ -66,17 +133,10 @@ pub struct Kernel {
 }
 
 impl Kernel {
-    /// Builds a kernel. `scale` must be finite and ≥ 0. The `sphere` kernel is refused with an
-    /// explanation: its series solution has not been implemented and verified against the SPEC §4.1
-    /// orientation values, and an unverified compliance would silently bias every reference curve.
+    /// Builds a kernel. `scale` must be finite and ≥ 0.
     pub fn new(kind: KernelKind, scale: f64) -> Result<Self, String> {
         if !(scale.is_finite() && scale >= 0.0) {
             return Err(format!("invalid kernel_scale = {scale}: must be finite and >= 0"));
-        }
-        if kind == KernelKind::Sphere {
-            return Err("kernel 'sphere' (finite elastic sphere, SPEC §4.1) is not available in this \
-                        version: use 'boussinesq' or 'none'"
-                .to_string());
         }
         Ok(Self { kind, scale })
     }
@@ -102,10 +162,18 @@ impl Kernel {
     /// d = 2 r s, i.e. exactly minus the Eq. 2 displacement per unit force (Eq. 2 returns the radius
     /// growth; G is the inward displacement). dG/dμ = dG/ds · ds/dμ with ds/dμ = −1/(4s) and
     /// dB/ds = 2(1−2ν) − 2(7−8ν)s (derivative of SPEC §2's B(s)).
+    ///
+    /// Sphere (SPEC §4.1): G = g(μ) / (E r), g the finite-sphere displacement of the module
+    /// documentation ([`sphere_unit_displacement`]).
     #[inline]
     pub fn compliance(&self, mu: f64, e: f64, nu: f64, r: f64) -> (f64, f64) {
         match self.kind {
-            KernelKind::None | KernelKind::Sphere => (0.0, 0.0),
+            KernelKind::None => (0.0, 0.0),
+            KernelKind::Sphere => {
+                let (g, dg) = sphere_unit_displacement(mu, nu);
+                let c = self.scale / (e * r);
+                (c * g, c * dg)
+            }
             KernelKind::Boussinesq => {
                 let s = (0.5 * (1.0 - mu)).clamp(0.0, 1.0).sqrt();
                 if s < MIN_HALF_ANGLE_SINE {
@@ -120,6 +188,205 @@ impl Kernel {
             }
         }
     }
+}
+
+/// Legendre terms summed for the smooth remainder of the sphere kernel (coefficients O(n⁻⁴):
+/// truncation below 1e−10 in g).
+pub const SPHERE_TERMS: usize = 3000;
+
+/// Intervals of the uniform grid in s = sin(θ/2) ∈ [0, 1] on which the remainder is tabulated.
+pub const SPHERE_GRID: usize = 1024;
+
+/// Coefficient d_n of the Legendre series of the sphere kernel: the inward surface displacement,
+/// in units P/(E R), of a unit inward point force at the pole is g = Σ d_n P_n(cos θ). d_1 is the
+/// rigid translation that makes the regular self term vanish (module documentation).
+pub fn sphere_coefficient(n: usize, nu: f64) -> f64 {
+    if n == 1 {
+        sphere_table(nu).d1
+    } else {
+        sphere_formula(n, nu)
+    }
+}
+
+/// d_n = (2n+1) w_n / (4π) for n ≠ 1 (0 for n = 1).
+fn sphere_formula(n: usize, nu: f64) -> f64 {
+    if n == 1 {
+        return 0.0;
+    }
+    let x = n as f64;
+    let w = (1.0 + nu) * (2.0 * (1.0 - nu) * x * x + nu * x + 2.0 * nu - 1.0)
+        / ((x - 1.0) * (x * x + (2.0 * nu + 1.0) * x + nu + 1.0));
+    (2.0 * x + 1.0) * w / (4.0 * PI)
+}
+
+/// Asymptotic coefficients (a, b, c, e) of d_n = a + b/n + c/(n(n+1)) + e/(n(n+1)(n+2)) + O(n⁻⁴).
+fn sphere_asymptotics(nu: f64) -> [f64; 4] {
+    let q = 1.0 + nu;
+    [
+        (1.0 - nu * nu) / PI,
+        q * (1.0 - 2.0 * nu).powi(2) / (2.0 * PI),
+        -q * (((16.0 * nu - 12.0) * nu - 5.0) * nu + 2.0) / (4.0 * PI),
+        q * ((((32.0 * nu - 32.0) * nu - 10.0) * nu + 13.0) * nu + 1.0) / (4.0 * PI),
+    ]
+}
+
+/// Closed-form sums of the subtracted asymptotic series at s = sin(θ/2) > 0, and their
+/// s-derivatives: Σ P_n = 1/(2s), Σ P_n/n, Σ P_n/(n(n+1)), Σ P_n/(n(n+1)(n+2)) (sums from n = 1
+/// except the first).
+fn sphere_closed_forms(s: f64) -> ([f64; 4], [f64; 4]) {
+    let l1 = s.ln_1p();
+    let ls = s.ln();
+    let v = [0.5 / s, -(ls + l1), 1.0 - 2.0 * l1, s * s * ls - (1.0 + s * s) * l1 + s + 0.25];
+    let d = [
+        -0.5 / (s * s),
+        -1.0 / s - 1.0 / (1.0 + s),
+        -2.0 / (1.0 + s),
+        2.0 * s * ls + s - 2.0 * s * l1 - (1.0 + s * s) / (1.0 + s) + 1.0,
+    ];
+    (v, d)
+}
+
+/// The tabulated smooth remainder of the sphere kernel for one ν.
+struct SphereTable {
+    asym: [f64; 4],
+    /// The n = 1 coefficient (rigid translation) that makes the regular self term vanish.
+    d1: f64,
+    /// Remainder Σ ρ_n P_n(1 − 2s²) and its s-derivative at s_j = j / SPHERE_GRID.
+    val: Box<[f64]>,
+    der: Box<[f64]>,
+}
+
+impl SphereTable {
+    /// Asymptotic coefficients, d_1, and the remainder coefficients ρ_n, n < [`SPHERE_TERMS`].
+    fn coefficients(nu: f64) -> ([f64; 4], f64, Vec<f64>) {
+        let asym = sphere_asymptotics(nu);
+        let [a, b, c, e] = asym;
+        let mut rho: Vec<f64> = (0..SPHERE_TERMS)
+            .map(|n| {
+                let x = n as f64;
+                match n {
+                    0 => sphere_formula(0, nu) - a,
+                    1 => -a - b - c / 2.0 - e / 6.0,
+                    _ => {
+                        sphere_formula(n, nu)
+                            - a
+                            - b / x
+                            - c / (x * (x + 1.0))
+                            - e / (x * (x + 1.0) * (x + 2.0))
+                    }
+                }
+            })
+            .collect();
+        // Regular self term with d_1 = 0 at s = 0 (P_n(1) = 1; the b and e parts of the closed forms
+        // tend to −b ln s and e/4, the c part to c), then d_1 = −g_reg.
+        let g_reg: f64 = c + 0.25 * e + rho.iter().rev().sum::<f64>();
+        let d1 = -g_reg;
+        rho[1] += d1;
+        (asym, d1, rho)
+    }
+
+    fn build(nu: f64) -> Self {
+        let (asym, d1, rho) = Self::coefficients(nu);
+        let mut val = vec![0.0; SPHERE_GRID + 1];
+        let mut der = vec![0.0; SPHERE_GRID + 1];
+        for j in 0..=SPHERE_GRID {
+            let s = j as f64 / SPHERE_GRID as f64;
+            let mu = 1.0 - 2.0 * s * s;
+            // P_n and P_n' by the three-term recurrences; P'_{n+1} = P'_{n−1} + (2n+1) P_n.
+            let (mut p0, mut p1) = (1.0, mu);
+            let (mut d0, mut d1) = (0.0, 1.0);
+            let (mut sv, mut sd) = (rho[0], 0.0);
+            for (n, &r) in rho.iter().enumerate().skip(1) {
+                sv += r * p1;
+                sd += r * d1;
+                let x = n as f64;
+                let p2 = ((2.0 * x + 1.0) * mu * p1 - x * p0) / (x + 1.0);
+                let d2 = d0 + (2.0 * x + 1.0) * p1;
+                (p0, p1, d0, d1) = (p1, p2, d1, d2);
+            }
+            val[j] = sv;
+            der[j] = sd * (-4.0 * s);
+        }
+        Self { asym, d1, val: val.into_boxed_slice(), der: der.into_boxed_slice() }
+    }
+
+    /// g and dg/ds at s ∈ (0, 1].
+    #[inline]
+    fn eval(&self, s: f64) -> (f64, f64) {
+        let m = SPHERE_GRID as f64;
+        let u = s * m;
+        let j = (u as usize).min(SPHERE_GRID - 1);
+        let t = u - j as f64;
+        let h = 1.0 / m;
+        let (v0, v1, m0, m1) = (self.val[j], self.val[j + 1], self.der[j] * h, self.der[j + 1] * h);
+        let (t2, t3) = (t * t, t * t * t);
+        let rem = (2.0 * t3 - 3.0 * t2 + 1.0) * v0
+            + (t3 - 2.0 * t2 + t) * m0
+            + (-2.0 * t3 + 3.0 * t2) * v1
+            + (t3 - t2) * m1;
+        let drem =
+            ((6.0 * t2 - 6.0 * t) * (v0 - v1) + (3.0 * t2 - 4.0 * t + 1.0) * m0 + (3.0 * t2 - 2.0 * t) * m1)
+                * m;
+        let (cf, dcf) = sphere_closed_forms(s);
+        let mut g = rem;
+        let mut dg = drem;
+        for k in 0..4 {
+            g += self.asym[k] * cf[k];
+            dg += self.asym[k] * dcf[k];
+        }
+        (g, dg)
+    }
+}
+
+static SPHERE_TABLES: Mutex<Vec<(u64, &'static SphereTable)>> = Mutex::new(Vec::new());
+
+thread_local! {
+    static LAST_SPHERE_TABLE: Cell<Option<(u64, &'static SphereTable)>> = const { Cell::new(None) };
+}
+
+/// The table for `nu`, built on first use and kept for the life of the process (a few distinct
+/// Poisson ratios per run, 16 KiB each).
+fn sphere_table(nu: f64) -> &'static SphereTable {
+    let key = nu.to_bits();
+    if let Some((k, t)) = LAST_SPHERE_TABLE.with(Cell::get) {
+        if k == key {
+            return t;
+        }
+    }
+    let t = {
+        let mut tables = SPHERE_TABLES.lock().unwrap_or_else(|e| e.into_inner());
+        match tables.iter().find(|(k, _)| *k == key) {
+            Some(&(_, t)) => t,
+            None => {
+                let t: &'static SphereTable = Box::leak(Box::new(SphereTable::build(nu)));
+                tables.push((key, t));
+                t
+            }
+        }
+    };
+    LAST_SPHERE_TABLE.with(|c| c.set(Some((key, t))));
+    t
+}
+
+/// Inward surface displacement g(μ) of the finite sphere, in units P/(E R), at direction cosine
+/// `mu` from a unit inward point force (module documentation), and dg/dμ. Returns (0, 0) for
+/// coincident points (s = sin(θ/2) < [`MIN_HALF_ANGLE_SINE`]), as the Boussinesq kernel does.
+#[inline]
+pub fn sphere_unit_displacement(mu: f64, nu: f64) -> (f64, f64) {
+    let s = (0.5 * (1.0 - mu)).clamp(0.0, 1.0).sqrt();
+    if s < MIN_HALF_ANGLE_SINE {
+        return (0.0, 0.0);
+    }
+    let (g, dg_ds) = sphere_table(nu).eval(s);
+    (g, dg_ds * (-0.25 / s))
+}
+
+/// Inward surface displacement at polar angle `theta` (radians) of a sphere loaded by a diametric pair
+/// of unit compressive point forces at the poles, in units P/(E R) (the SPEC §4.1 orientation case):
+/// g(cos θ) + g(−cos θ).
+pub fn sphere_pair_displacement(theta: f64, nu: f64) -> f64 {
+    let mu = theta.cos();
+    sphere_unit_displacement(mu, nu).0 + sphere_unit_displacement(-mu, nu).0
 }
 
 #[cfg(test)]
@@ -173,10 +440,235 @@ mod tests {
     }
 
     #[test]
-    fn sphere_kernel_is_refused_and_bad_scale_rejected() {
-        assert!(Kernel::new(KernelKind::Sphere, 1.0).unwrap_err().contains("not available"));
+    fn sphere_kernel_is_accepted_and_bad_scale_rejected() {
+        assert_eq!(Kernel::new(KernelKind::Sphere, 1.0).unwrap().kind(), KernelKind::Sphere);
+        assert_eq!("sphere".parse::<KernelKind>().unwrap(), KernelKind::Sphere);
         assert!(Kernel::new(KernelKind::Boussinesq, f64::NAN).is_err());
+        assert!(Kernel::new(KernelKind::Sphere, -1.0).is_err());
         assert!("halfspace".parse::<KernelKind>().is_err());
         assert_eq!("none".parse::<KernelKind>().unwrap(), KernelKind::None);
+    }
+
+    /// Inward displacement (units p R / E) of the surface under σ_rr = −P_n, σ_rθ = 0, from the two
+    /// displacement families solved numerically (2×2), not from the closed form.
+    fn w_n_by_solving(n: usize, nu: f64) -> f64 {
+        let x = n as f64;
+        let (g_mod, lam) = (1.0, 2.0 * nu / (1.0 - 2.0 * nu));
+        // u_r = f(r) P_n, u_θ = h(r) P_n'; at r = 1 with f = F r^k, h = H r^k:
+        // σ_rr = 2G f' + λ (f' + 2f − n(n+1) h), σ_rθ = G (h' − h + f).
+        let traction = |f: f64, h: f64, k: f64| {
+            let (fp, hp) = (k * f, k * h);
+            (2.0 * g_mod * fp + lam * (fp + 2.0 * f - x * (x + 1.0) * h), g_mod * (hp - h + f))
+        };
+        let a = x + 5.0 - 4.0 * nu;
+        let b = -((1.0 - 2.0 * nu) * (4.0 * x + 2.0) + 2.0 * x);
+        let (f1, h1, k1) = (x, 1.0, x - 1.0);
+        let (f2, h2, k2) = (a * x + b, a, x + 1.0);
+        let (s1, t1) = traction(f1, h1, k1);
+        let (s2, t2) = traction(f2, h2, k2);
+        // c1 s1 + c2 s2 = −1, c1 t1 + c2 t2 = 0.
+        let det = s1 * t2 - s2 * t1;
+        let (c1, c2) = (-t2 / det, t1 / det);
+        let ur = c1 * f1 + c2 * f2;
+        -ur * 2.0 * g_mod * (1.0 + nu)
+    }
+
+    #[test]
+    fn sphere_coefficients_match_the_traction_solution() {
+        for nu in [0.0, 0.25, 0.3, 0.45, 0.499] {
+            for n in (0..60).filter(|&n| n != 1) {
+                let want = (2 * n + 1) as f64 * w_n_by_solving(n, nu) / (4.0 * PI);
+                let got = sphere_coefficient(n, nu);
+                assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "n {n} nu {nu}: {got} vs {want}");
+            }
+        }
+        // Lamé: uniform pressure p gives the inward displacement (1−2ν) p R / E.
+        assert!((sphere_coefficient(0, 0.3) - 0.4 / (4.0 * PI)).abs() < 1e-15);
+        assert_eq!(sphere_coefficient(0, 0.5), 0.0);
+    }
+
+    /// (C,1) mean of the raw Legendre series Σ d_n P_n(μ) over `terms` partial sums: an
+    /// independent summation of the same series (no asymptotic subtraction, no table).
+    fn cesaro(mu: f64, nu: f64, terms: usize, pair: bool) -> f64 {
+        let (mut p0, mut p1) = (1.0, mu);
+        let (mut partial, mut mean) = (0.0, 0.0);
+        for n in 0..terms {
+            let p = match n {
+                0 => 1.0,
+                1 => mu,
+                _ => {
+                    let x = n as f64;
+                    let p2 = ((2.0 * x - 1.0) * mu * p1 - (x - 1.0) * p0) / x;
+                    (p0, p1) = (p1, p2);
+                    p2
+                }
+            };
+            let d = if pair {
+                if n % 2 == 0 {
+                    2.0 * sphere_coefficient(n, nu)
+                } else {
+                    0.0
+                }
+            } else {
+                sphere_coefficient(n, nu)
+            };
+            partial += d * p;
+            mean += partial;
+        }
+        mean / terms as f64
+    }
+
+    #[test]
+    fn sphere_orientation_values() {
+        // Converged diametric-pair values (units P/(E R)), measured with this kernel; the SPEC §4.1
+        // values −0.158, −0.204, −0.084, −0.129 are the raw series truncated (next test).
+        for (theta, nu, want) in
+            [(90.0, 0.3, -0.16168), (90.0, 0.5, -0.20721), (60.0, 0.3, -0.07919), (60.0, 0.5, -0.12488)]
+        {
+            let t = f64::to_radians(theta);
+            let got = sphere_pair_displacement(t, nu);
+            assert!((got - want).abs() < 1e-5, "theta {theta} nu {nu}: {got} vs {want}");
+            // w(θ) = w(π − θ).
+            let back = sphere_pair_displacement(PI - t, nu);
+            assert!((got - back).abs() < 1e-12, "theta {theta} nu {nu}: {got} vs {back}");
+            // Independent summation of the raw series.
+            let c = cesaro(t.cos(), nu, 20_000, true);
+            assert!((got - c).abs() < 1e-4, "theta {theta} nu {nu}: {got} vs Cesàro {c}");
+        }
+        // The single load, also against the Cesàro mean, over the whole range (θ = 180° included).
+        for nu in [0.3, 0.5] {
+            for theta in [20.0_f64, 45.0, 90.0, 135.0, 170.0, 180.0] {
+                let mu = theta.to_radians().cos();
+                let (g, _) = sphere_unit_displacement(mu, nu);
+                let c = cesaro(mu, nu, 20_000, false);
+                assert!((g - c).abs() < 1e-4, "theta {theta} nu {nu}: {g} vs Cesàro {c}");
+            }
+        }
+    }
+
+    #[test]
+    fn spec_orientation_values_are_the_truncated_raw_series() {
+        // The same coefficients summed without acceleration up to n = 3400 give the SPEC §4.1
+        // digits; the partial sums still oscillate by ±4e−3 there (n^−½ decay).
+        let raw = |theta: f64, nu: f64, n_max: usize| -> f64 {
+            let mu = theta.to_radians().cos();
+            let (mut p0, mut p1, mut sum) = (1.0, mu, 2.0 * sphere_coefficient(0, nu));
+            for n in 1..n_max {
+                let x = n as f64;
+                let p2 = ((2.0 * x + 1.0) * mu * p1 - x * p0) / (x + 1.0);
+                (p0, p1) = (p1, p2);
+                if (n + 1) % 2 == 0 {
+                    sum += 2.0 * sphere_coefficient(n + 1, nu) * p2;
+                }
+            }
+            sum
+        };
+        for (theta, nu, spec) in
+            [(90.0, 0.3, -0.158), (90.0, 0.5, -0.204), (60.0, 0.3, -0.084), (60.0, 0.5, -0.129)]
+        {
+            let truncated = raw(theta, nu, 3400);
+            assert!((truncated - spec).abs() < 1e-3, "theta {theta} nu {nu}: {truncated} vs SPEC {spec}");
+            let converged = sphere_pair_displacement(f64::to_radians(theta), nu);
+            assert!((converged - spec).abs() > 3e-3);
+        }
+    }
+
+    /// ∫_0^1 f(s) ds by composite Simpson (with μ = 1 − 2s², dμ = −4s ds removes the 1/s
+    /// singularity of g: ∫_{−1}^{1} g dμ = ∫_0^1 4s g ds).
+    fn integrate(f: impl Fn(f64) -> f64) -> f64 {
+        let m = 20_000;
+        let h = 1.0 / m as f64;
+        let mut sum = 0.0;
+        for j in 0..=m {
+            let s = j as f64 * h;
+            let w = if j == 0 || j == m {
+                1.0
+            } else if j % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            sum += w * f(s);
+        }
+        sum * h / 3.0
+    }
+
+    #[test]
+    fn sphere_volume_and_rigid_translation() {
+        for nu in [0.0, 0.3, 0.5] {
+            let g = |mu: f64| sphere_unit_displacement(mu, nu).0;
+            let [a, b, _, _] = sphere_asymptotics(nu);
+            // 4s g(s), with its limit 2a at s = 0 (b s ln s → 0).
+            let weighted = |s: f64, f: &dyn Fn(f64) -> f64| {
+                let mu = 1.0 - 2.0 * s * s;
+                if s == 0.0 {
+                    2.0 * a * f(mu)
+                } else {
+                    4.0 * s * g(mu) * f(mu)
+                }
+            };
+            // Volume decrease 2πR² ∫ g dμ = (1−2ν) P R / E (Betti with a uniform pressure).
+            let vol = 2.0 * PI * integrate(|s| weighted(s, &|_| 1.0));
+            assert!((vol - (1.0 - 2.0 * nu)).abs() < 1e-5, "nu {nu}: volume {vol}");
+            // The n = 1 part is the rigid translation d_1 alone: (3/2) ∫ g μ dμ = d_1.
+            let d1 = 1.5 * integrate(|s| weighted(s, &|mu| mu));
+            assert!((d1 - sphere_coefficient(1, nu)).abs() < 1e-5, "nu {nu}: {d1}");
+            // The regular self term vanishes: g − a/(2s) + b ln s → 0 as s → 0.
+            let s: f64 = 1e-4;
+            let reg = g(1.0 - 2.0 * s * s) - a / (2.0 * s) + b * s.ln();
+            assert!(reg.abs() < 1e-3, "nu {nu}: regular self term {reg}");
+        }
+        assert!((sphere_coefficient(1, 0.5) - 0.3170).abs() < 1e-4);
+        assert!((sphere_coefficient(1, 0.3) - 0.5034).abs() < 1e-4);
+    }
+
+    #[test]
+    fn sphere_derivative_matches_finite_difference_and_is_finite_at_half() {
+        for (nu, scale) in [(0.3, 1.0), (0.5, 0.8), (0.0, 1.0)] {
+            let k = Kernel::new(KernelKind::Sphere, scale).unwrap();
+            for mu in [-1.0, -0.99999, -0.999, -0.7, -0.5, 0.0, 0.31, 0.5, 0.9, 0.999, 0.99999] {
+                let (g, d) = k.compliance(mu, 2.0, nu, 0.5);
+                assert!(g.is_finite() && d.is_finite(), "nu {nu} mu {mu}: {g} {d}");
+                if mu > -1.0 {
+                    let h = 1e-7 * (1.0 - mu.abs()).max(1e-3);
+                    let fd = (k.compliance(mu + h, 2.0, nu, 0.5).0 - k.compliance(mu - h, 2.0, nu, 0.5).0)
+                        / (2.0 * h);
+                    assert!((d - fd).abs() < 1e-5 * fd.abs().max(1.0), "nu {nu} mu {mu}: {d} vs {fd}");
+                }
+            }
+            // At the antipode the one-sided difference agrees too.
+            let (_, d) = k.compliance(-1.0, 2.0, nu, 0.5);
+            let fd = (k.compliance(-1.0 + 1e-6, 2.0, nu, 0.5).0 - k.compliance(-1.0, 2.0, nu, 0.5).0) / 1e-6;
+            assert!((d - fd).abs() < 1e-4 * fd.abs().max(1.0), "nu {nu}: {d} vs {fd}");
+            // Coincident contacts contribute nothing, as with the Boussinesq kernel.
+            assert_eq!(k.compliance(1.0, 2.0, nu, 0.5), (0.0, 0.0));
+            // Scaling with γ / (E r).
+            let (g1, _) = k.compliance(0.2, 2.0, nu, 0.5);
+            let (g2, _) = Kernel::new(KernelKind::Sphere, 1.0).unwrap().compliance(0.2, 1.0, nu, 1.0);
+            assert!((g1 - scale * g2).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn sphere_table_interpolates_the_series() {
+        // Between grid nodes (where the cubic is furthest from its data) against the remainder
+        // series summed directly at that point.
+        for nu in [0.3, 0.5] {
+            let (asym, _, rho) = SphereTable::coefficients(nu);
+            for j in [0usize, 1, 7, 100, 512, 1000, 1023] {
+                let s = (j as f64 + 0.5) / SPHERE_GRID as f64;
+                let mu = 1.0 - 2.0 * s * s;
+                let (mut p0, mut p1, mut rem) = (1.0, mu, rho[0]);
+                for (n, r) in rho.iter().enumerate().skip(1) {
+                    rem += r * p1;
+                    let x = n as f64;
+                    (p0, p1) = (p1, ((2.0 * x + 1.0) * mu * p1 - x * p0) / (x + 1.0));
+                }
+                let (cf, _) = sphere_closed_forms(s);
+                let direct = rem + (0..4).map(|k| asym[k] * cf[k]).sum::<f64>();
+                let (g, _) = sphere_unit_displacement(mu, nu);
+                assert!((g - direct).abs() < 1e-10, "nu {nu} s {s}: {g} vs {direct}");
+            }
+        }
     }
 }

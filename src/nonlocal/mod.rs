@@ -3,7 +3,7 @@
 //! contact force deforms its particle at all the particle's other contacts.
 //!
 //! - [`kernel`]: the compliance G of one particle's surface at one contact to the load at another
-//!   (`boussinesq`, `none`; `sphere` is refused until it is implemented and verified).
+//!   (`sphere`: finite elastic sphere, Legendre series; `boussinesq`: half-space; `none`).
 //! - [`solver`]: Newton with an exact sparse Jacobian, active set, line search and load stepping.
 //! - [`scene`]: the JSON scene format, the LIGGGHTS data-file reader and the CSV-writing driver
 //!   behind `mcdem nonlocal SCENE` (documented in `docs/nonlocal.md`).

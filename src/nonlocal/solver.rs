@@ -1052,7 +1052,16 @@ mod tests {
 
     #[test]
     fn jacobian_matches_finite_differences() {
-        let s = cluster(KernelKind::Boussinesq);
+        jacobian_check(KernelKind::Boussinesq);
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences_with_the_sphere_kernel() {
+        jacobian_check(KernelKind::Sphere);
+    }
+
+    fn jacobian_check(kind: KernelKind) {
+        let s = cluster(kind);
         let nc = s.contacts.len();
         assert!(nc >= 8, "cluster has only {nc} contacts");
         let n = s.x.len();
@@ -1087,6 +1096,100 @@ mod tests {
                     panic!("J[{row}][{col}] = {an}, finite difference {fd}");
                 }
             }
+        }
+    }
+
+    /// Single hydrogel sphere (SPEC §4 die: E = 23.3 kPa, ν = 0.5, r = 1 mm, walls 50 MPa) in a
+    /// rigid cubic die of side 2r, top plate pushed down by Δ in steps of 0.05 r. Returns, per step,
+    /// (Δ/r, P_v, P_h, P_v Hertz) and checks convergence and the die's symmetry.
+    fn die(kind: KernelKind) -> Vec<(f64, f64, f64, f64)> {
+        let (e, nu, r) = (23.3e3, 0.5, 1e-3);
+        let m = Material::hertz(e, nu).unwrap();
+        let wm = Material::hertz(50e6, 0.5).unwrap();
+        let l = 2.0 * r;
+        let w = |name: &str, p: [f64; 3], n: [f64; 3]| Wall {
+            name: name.into(),
+            point: Vec3::from(p),
+            normal: Vec3::from(n),
+        };
+        let walls = vec![
+            w("xlo", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            w("xhi", [l, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+            w("ylo", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+            w("yhi", [0.0, l, 0.0], [0.0, -1.0, 0.0]),
+            w("bottom", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            w("top", [0.0, 0.0, l], [0.0, 0.0, -1.0]),
+        ];
+        let sphere = Sphere { id: 1, x: Vec3::new(r, r, r), radius: r, material: m };
+        let mut s =
+            Nonlocal::new(&[sphere], &walls, wm, Kernel::new(kind, 1.0).unwrap(), Settings::default())
+                .unwrap();
+        let e_star = PairCoeffs::new(&m, &wm, 1.0, 0.0).unwrap().e_star;
+        let steps = 6;
+        let disp = 0.3 * r;
+        let top0 = walls[5].point;
+        let path = |t: f64| {
+            let points = walls
+                .iter()
+                .enumerate()
+                .map(|(k, wall)| if k == 5 { top0 - Vec3::z() * (t * disp) } else { wall.point })
+                .collect();
+            (points, 0.0)
+        };
+        let mut out = Vec::new();
+        for k in 1..=steps {
+            let st = s.advance(&path, (k - 1) as f64 / steps as f64, k as f64 / steps as f64).unwrap();
+            assert!(st.residual <= 1e-9, "{kind} step {k}: residual {}", st.residual);
+            let f: Vec<f64> = s.wall_forces().iter().zip(&walls).map(|(f, w)| -f.dot(&w.normal)).collect();
+            let (pv, ph) = (f[5], f[0]);
+            assert!(pv.is_finite() && ph.is_finite());
+            assert!((f[4] - pv).abs() <= 1e-9 * pv, "{kind}: bottom {} top {pv}", f[4]);
+            for fw in &f[1..4] {
+                assert!((fw - ph).abs() <= 1e-9 * pv, "{kind}: side {fw} vs {ph}");
+            }
+            let dr = disp / r * k as f64 / steps as f64;
+            let hertz = crate::physics::hertz::hertz_force(e_star, r, 0.5 * dr * r);
+            // Independent reduced solve by symmetry (unknowns P_v, P_h), with the kernel's G at 90°
+            // and 180°: P_v: Δ/2 = H(P_v) + G180 P_v + 4 G90 P_h; P_h: 0 = H(P_h) + 2 G90 P_v + (G180 + 2 G90) P_h.
+            let kern = Kernel::new(kind, 1.0).unwrap();
+            let (g90, g180) = (kern.compliance(0.0, e, nu, r).0, kern.compliance(-1.0, e, nu, r).0);
+            let h = |p: f64| (3.0 * p.max(0.0) / (4.0 * e_star * r.sqrt())).powf(2.0 / 3.0);
+            let res = |pv: f64, ph: f64| {
+                (
+                    0.5 * dr * r - h(pv) - g180 * pv - 4.0 * g90 * ph,
+                    -h(ph) - 2.0 * g90 * pv - (g180 + 2.0 * g90) * ph,
+                )
+            };
+            let (mut qv, mut qh) = (pv * 1.01, ph * 1.01 + 1e-9 * pv);
+            for _ in 0..60 {
+                let (f1, f2) = res(qv, qh);
+                let (e1, e2) = (1e-7 * qv, 1e-7 * qv);
+                let (a11, a21) = ((res(qv + e1, qh).0 - f1) / e1, (res(qv + e1, qh).1 - f2) / e1);
+                let (a12, a22) = ((res(qv, qh + e2).0 - f1) / e2, (res(qv, qh + e2).1 - f2) / e2);
+                let det = a11 * a22 - a12 * a21;
+                qv -= (a22 * f1 - a12 * f2) / det;
+                qh -= (-a21 * f1 + a11 * f2) / det;
+            }
+            assert!((pv - qv).abs() <= 1e-6 * qv, "{kind} dr {dr}: P_v {pv} vs reduced {qv}");
+            assert!(
+                (ph - qh).abs() <= 1e-6 * qh.abs().max(1e-3 * qv),
+                "{kind} dr {dr}: P_h {ph} vs reduced {qh}"
+            );
+            out.push((dr, pv, ph, hertz));
+        }
+        out
+    }
+
+    #[test]
+    fn die_with_the_sphere_kernel() {
+        let sphere = die(KernelKind::Sphere);
+        let bous = die(KernelKind::Boussinesq);
+        println!("dr    P_v Hertz   P_v sphere  P_h sphere  P_v bouss.  P_h bouss.");
+        for (a, b) in sphere.iter().zip(&bous) {
+            println!("{:.2}  {:.4e}  {:.4e}  {:.3e}  {:.4e}  {:.3e}", a.0, a.3, a.1, a.2, b.1, b.2);
+            // Converged, finite, stiffer than Hertz (the outward bulge at the far contacts), and a
+            // side-wall force builds up.
+            assert!(a.1 > a.3 && a.2 > 0.0, "dr {}: P_v {} Hertz {} P_h {}", a.0, a.1, a.3, a.2);
         }
     }
 }
