@@ -46,6 +46,10 @@ pub struct SceneSpec {
     /// LIGGGHTS data file (`Atoms` lines `id type diameter density x y z`), relative to the scene file.
     #[serde(default)]
     pub liggghts_data: Option<PathBuf>,
+    /// LIGGGHTS/mcdem `dump custom` file with columns `id radius x y z` (any order, more allowed;
+    /// the last frame is used), relative to the scene file. Alternative to `liggghts_data`.
+    #[serde(default)]
+    pub liggghts_dump: Option<PathBuf>,
     /// Inline spheres (used when `liggghts_data` is absent).
     #[serde(default)]
     pub spheres: Option<Vec<SphereSpec>>,
@@ -81,6 +85,12 @@ pub struct SceneSpec {
     pub tolerance: Option<f64>,
     #[serde(default)]
     pub max_subdivisions: Option<u32>,
+    /// Affine predictor for the load increments (see `Settings::affine_predictor`).
+    #[serde(default)]
+    pub affine_predictor: bool,
+    /// FIRE before Newton at every increment (see `Settings::fire_first`).
+    #[serde(default)]
+    pub fire_first: bool,
 }
 
 fn default_kernel() -> String {
@@ -151,6 +161,58 @@ pub fn read_liggghts_data(path: &Path, material: Material) -> Result<(Vec<Sphere
     Ok((out, densities))
 }
 
+/// Reads the last frame of a LIGGGHTS `dump custom` text file that has the columns `id`, `radius`
+/// (or `diameter`), `x`, `y`, `z` (any order, other columns ignored), e.g. the state written by
+/// `liggghts_inputs/hydrogel.in` with `-var statestroke N`. Every particle gets `material`.
+pub fn read_liggghts_dump(path: &Path, material: Material) -> Result<Vec<Sphere>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines
+        .iter()
+        .rposition(|l| l.starts_with("ITEM: TIMESTEP"))
+        .ok_or_else(|| format!("{}: no 'ITEM: TIMESTEP' frame", path.display()))?;
+    let frame = &lines[start..];
+    let count_at = frame
+        .iter()
+        .position(|l| l.starts_with("ITEM: NUMBER OF ATOMS"))
+        .ok_or_else(|| format!("{}: no 'ITEM: NUMBER OF ATOMS'", path.display()))?;
+    let n: usize = frame
+        .get(count_at + 1)
+        .and_then(|l| l.trim().parse().ok())
+        .ok_or_else(|| format!("{}: bad atom count", path.display()))?;
+    let head_at = frame
+        .iter()
+        .position(|l| l.starts_with("ITEM: ATOMS"))
+        .ok_or_else(|| format!("{}: no 'ITEM: ATOMS' header", path.display()))?;
+    let names: Vec<&str> = frame[head_at]["ITEM: ATOMS".len()..].split_whitespace().collect();
+    let col = |name: &str| names.iter().position(|c| *c == name);
+    let need = |name: &str| col(name).ok_or_else(|| format!("{}: dump has no '{name}' column", path.display()));
+    let (ci, cx, cy, cz) = (need("id")?, need("x")?, need("y")?, need("z")?);
+    let (cr, scale) = match (col("radius"), col("diameter")) {
+        (Some(c), _) => (c, 1.0),
+        (None, Some(c)) => (c, 0.5),
+        _ => return Err(format!("{}: dump has neither 'radius' nor 'diameter'", path.display())),
+    };
+    let rows = frame.get(head_at + 1..head_at + 1 + n).filter(|r| r.len() == n).ok_or_else(|| {
+        format!("{}: the last frame announces {n} atoms but is shorter", path.display())
+    })?;
+    let mut out = Vec::with_capacity(n);
+    for (k, line) in rows.iter().enumerate() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let bad = || format!("{} frame line {}: '{line}'", path.display(), k + 1);
+        let num = |c: usize| -> Result<f64, String> {
+            w.get(c).and_then(|v| v.parse::<f64>().ok()).filter(|v| v.is_finite()).ok_or_else(bad)
+        };
+        let id: u64 = w.get(ci).and_then(|v| v.parse().ok()).ok_or_else(bad)?;
+        let radius = scale * num(cr)?;
+        if radius <= 0.0 {
+            return Err(format!("{}: particle {id}: radius must be > 0", path.display()));
+        }
+        out.push(Sphere { id, x: Vec3::new(num(cx)?, num(cy)?, num(cz)?), radius, material });
+    }
+    Ok(out)
+}
+
 /// An axis-aligned box found among the walls: for each axis the indices of the low and high wall.
 #[derive(Debug, Clone, Copy)]
 struct BoxWalls {
@@ -212,12 +274,15 @@ impl Scene {
         let spec: SceneSpec = serde_json::from_str(text).map_err(|e| format!("scene: {e}"))?;
         let pm = material(&spec.particle_material, "particle_material")?;
         let wm = material(&spec.wall_material, "wall_material")?;
-        let (spheres, densities) = match (&spec.liggghts_data, &spec.spheres) {
-            (Some(p), None) => {
-                let p = if p.is_absolute() { p.clone() } else { base.join(p) };
-                read_liggghts_data(&p, pm)?
+        let resolve = |p: &PathBuf| if p.is_absolute() { p.clone() } else { base.join(p) };
+        let (spheres, densities) = match (&spec.liggghts_data, &spec.liggghts_dump, &spec.spheres) {
+            (Some(p), None, None) => read_liggghts_data(&resolve(p), pm)?,
+            (None, Some(p), None) => {
+                let s = read_liggghts_dump(&resolve(p), pm)?;
+                let d = vec![spec.density.unwrap_or(f64::NAN); s.len()];
+                (s, d)
             }
-            (None, Some(s)) => (
+            (None, None, Some(s)) => (
                 s.iter()
                     .enumerate()
                     .map(|(k, s)| Sphere {
@@ -229,7 +294,9 @@ impl Scene {
                     .collect::<Vec<_>>(),
                 vec![spec.density.unwrap_or(f64::NAN); s.len()],
             ),
-            _ => return Err("scene: give exactly one of 'liggghts_data' and 'spheres'".into()),
+            _ => {
+                return Err("scene: give exactly one of 'liggghts_data', 'liggghts_dump' and 'spheres'".into())
+            }
         };
         if spec.steps == 0 {
             return Err("scene: 'steps' must be >= 1".into());
@@ -259,6 +326,8 @@ impl Scene {
         if let Some(m) = spec.max_subdivisions {
             settings.max_subdivisions = m;
         }
+        settings.affine_predictor = spec.affine_predictor;
+        settings.fire_first = spec.fire_first;
         let solid_volume = match spec.solid_volume {
             Some(v) if v.is_finite() && v > 0.0 => v,
             Some(v) => return Err(format!("scene: solid_volume {v} must be finite and > 0")),

@@ -85,6 +85,15 @@ pub struct Settings {
     pub regularisation: f64,
     /// FIRE steps allowed when Newton fails on an increment (0: no fallback, halve at once).
     pub fire_fallback_steps: usize,
+    /// Affine predictor for load increments: when a wall moves along its normal, the particle
+    /// coordinates along that normal are stretched between it and the opposite (antiparallel) wall
+    /// in proportion to the change of the gap, before Newton starts. Only the initial guess
+    /// changes, never the equations.
+    pub affine_predictor: bool,
+    /// Relax every load increment by FIRE (nonlocal, lagged) before Newton instead of trying
+    /// Newton first: for packings that rearrange at nearly every increment (loose, frictionless
+    /// packings under compression) the warm-started Newton attempt is wasted work.
+    pub fire_first: bool,
 }
 
 impl Default for Settings {
@@ -96,6 +105,8 @@ impl Default for Settings {
             max_subdivisions: 6,
             regularisation: 1e-8,
             fire_fallback_steps: 100_000,
+            affine_predictor: false,
+            fire_first: false,
         }
     }
 }
@@ -803,30 +814,18 @@ impl Nonlocal {
             self.set_wall_point(w, p);
         }
         self.body_factor = factor;
-        // Warm-started Newton first, on a short budget when a FIRE fallback is available: a step
-        // that needs a rearrangement does not converge in a few iterations, and FIRE is cheaper than
-        // a long Newton stall.
-        let full = self.settings;
-        if full.fire_fallback_steps > 0 {
-            self.settings.max_newton = full.max_newton.min(8);
-            self.settings.max_active_rounds = full.max_active_rounds.min(2);
+        if self.settings.affine_predictor {
+            self.predict_affine(&saved_w);
         }
-        let first = self.solve();
-        self.settings = full;
-        // A failed increment is usually a rearrangement (contacts opening, particles sliding into
-        // new positions), which Newton cannot follow: relax with FIRE + Hertz at this load, then
-        // let Newton add the nonlocal terms, before halving the increment.
-        let result = match first {
-            Ok(s) => Ok(s),
-            Err(_) if self.settings.fire_fallback_steps > 0 => {
-                self.x = saved_x.clone();
-                let (fire_steps, _) = self.relax_hertz(self.settings.fire_fallback_steps, 1e-4);
-                self.solve().map(|mut s| {
-                    s.fire_steps += fire_steps;
-                    s
-                })
-            }
-            Err(e) => Err(e),
+        let predicted_x = self.x.clone();
+        let result = if self.settings.fire_first && self.settings.fire_fallback_steps > 0 {
+            let (fire_steps, _) = self.relax(self.settings.fire_fallback_steps, 1e-4, true);
+            self.solve().map(|mut s| {
+                s.fire_steps += fire_steps;
+                s
+            })
+        } else {
+            self.newton_then_fire(predicted_x)
         };
         match result {
             Ok(s) => Ok(s),
@@ -859,43 +858,168 @@ impl Nonlocal {
         }
     }
 
-    /// Hertz forces (no nonlocal term) on every particle at centres `x`, plus the body forces;
-    /// returns the net forces and the mean contact force (scaled units).
-    fn hertz_forces(&self, x: &[Vec3], candidates: &[(usize, usize)]) -> (Vec<Vec3>, f64) {
-        let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
-        let (mut sum, mut cnt) = (0.0, 0usize);
-        let mut add = |i: usize, other: Other, f: &mut Vec<Vec3>| {
-            let g = self.geometry(x, i, other);
-            if g.gamma > 0.0 {
-                let c = Contact { i, other, delta: g.gamma, k: self.stiffness(i, other) };
-                let p = Self::force_of(&c, g.gamma).0;
-                f[i] -= g.e * p;
-                if let Other::Particle(j) = other {
-                    f[j] += g.e * p;
-                }
-                sum += p;
-                cnt += 1;
+    /// Warm-started Newton on a short budget, then (if it fails and a fallback is allowed) FIRE and
+    /// Newton with the full budget.
+    fn newton_then_fire(&mut self, predicted_x: Vec<Vec3>) -> Result<StepStats, SolveError> {
+        // Warm-started Newton first, on a short budget when a FIRE fallback is available: a step
+        // that needs a rearrangement does not converge in a few iterations, and FIRE is cheaper than
+        // a long Newton stall.
+        let full = self.settings;
+        if full.fire_fallback_steps > 0 {
+            self.settings.max_newton = full.max_newton.min(8);
+            self.settings.max_active_rounds = full.max_active_rounds.min(2);
+        }
+        let first = self.solve();
+        self.settings = full;
+        // A failed increment is usually a rearrangement (contacts opening, particles sliding into
+        // new positions), which Newton cannot follow: relax by FIRE with the lagged nonlocal
+        // relation at this load, then let Newton make it exact, before halving the increment.
+        match first {
+            Ok(s) => Ok(s),
+            Err(_) if self.settings.fire_fallback_steps > 0 => {
+                self.x = predicted_x;
+                let (fire_steps, _) = self.relax(self.settings.fire_fallback_steps, 1e-4, true);
+                self.solve().map(|mut s| {
+                    s.fire_steps += fire_steps;
+                    s
+                })
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The affine predictor of [`Settings::affine_predictor`]: `old` are the wall points (scaled)
+    /// before the increment. For every wall that moved along its normal n and has an opposite wall
+    /// (normal −n), the coordinate s = (x − p_opposite)·n_opposite of every particle is multiplied by
+    /// gap_new / gap_old.
+    fn predict_affine(&mut self, old: &[Vec3]) {
+        for w in 0..self.walls.len() {
+            let n = self.walls[w].normal;
+            let moved = (self.walls[w].point - old[w]).dot(&n);
+            if moved == 0.0 {
+                continue;
+            }
+            let Some(o) = (0..self.walls.len()).find(|&o| self.walls[o].normal.dot(&n) < -1.0 + 1e-12) else {
+                continue;
+            };
+            let (po, no) = (self.walls[o].point, self.walls[o].normal);
+            let gap_old = (old[w] - old[o]).dot(&no);
+            let gap_new = (self.walls[w].point - po).dot(&no);
+            if !(gap_old > 0.0 && gap_new > 0.0) {
+                continue;
+            }
+            let f = gap_new / gap_old;
+            for x in self.x.iter_mut() {
+                let s = (*x - po).dot(&no);
+                *x += no * (s * (f - 1.0));
+            }
+        }
+    }
+
+    /// Contact forces for the FIRE relaxation at centres `x`: every candidate pair and every wall
+    /// of every particle whose geometric overlap exceeds −`margin`, P = K max(δ, 0)^{3/2} with
+    /// δ = γ − Σ G P_lagged (the nonlocal approach from the forces of the previous FIRE step, `lag`,
+    /// indexed like the candidates: pairs first, then particle × wall; all zero for Hertz).
+    /// Returns the net forces (with body forces), the mean contact force, and writes the new
+    /// forces and Hertz overlaps into `p_out`, `d_out`.
+    #[allow(clippy::too_many_arguments)]
+    fn fire_forces(
+        &self,
+        x: &[Vec3],
+        candidates: &[(usize, usize)],
+        lag: &[f64],
+        margin: f64,
+        p_out: &mut [f64],
+        d_out: &mut [f64],
+    ) -> (Vec<Vec3>, f64) {
+        let n = x.len();
+        let nw = self.walls.len();
+        let np = candidates.len();
+        let other_of = |k: usize| -> (usize, Other) {
+            if k < np {
+                (candidates[k].0, Other::Particle(candidates[k].1))
+            } else {
+                ((k - np) / nw, Other::Wall((k - np) % nw))
             }
         };
-        for &(i, j) in candidates {
-            add(i, Other::Particle(j), &mut f);
-        }
-        for i in 0..x.len() {
-            for w in 0..self.walls.len() {
-                add(i, Other::Wall(w), &mut f);
+        let total = np + n * nw;
+        let geo: Vec<Option<Geo>> = (0..total)
+            .map(|k| {
+                let (i, o) = other_of(k);
+                let g = self.geometry(x, i, o);
+                (g.gamma > -margin).then_some(g)
+            })
+            .collect();
+        // Per particle: the loaded contacts of the previous step (index, direction from the particle).
+        let nonlocal = !self.kernel.is_zero();
+        let mut adj: Vec<Vec<(usize, Vec3)>> = vec![Vec::new(); if nonlocal { n } else { 0 }];
+        if nonlocal {
+            for k in 0..total {
+                if let (Some(g), true) = (&geo[k], lag[k] > 0.0) {
+                    let (i, o) = other_of(k);
+                    adj[i].push((k, g.e));
+                    if let Other::Particle(j) = o {
+                        adj[j].push((k, -g.e));
+                    }
+                }
             }
+        }
+        let approach = |s: usize, c: usize, dir: &Vec3| -> f64 {
+            adj[s]
+                .iter()
+                .filter(|(k, _)| *k != c)
+                .map(|(k, e)| self.kernel.compliance(dir.dot(e), self.e[s], self.nu[s], self.r[s]).0 * lag[*k])
+                .sum()
+        };
+        let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
+        let (mut sum, mut cnt) = (0.0, 0usize);
+        for k in 0..total {
+            p_out[k] = 0.0;
+            d_out[k] = f64::NEG_INFINITY;
+            let Some(g) = &geo[k] else { continue };
+            let (i, o) = other_of(k);
+            let mut delta = g.gamma;
+            if nonlocal {
+                delta -= approach(i, k, &g.e);
+                if let Other::Particle(j) = o {
+                    delta -= approach(j, k, &(-g.e));
+                }
+            }
+            d_out[k] = delta;
+            if delta <= 0.0 {
+                continue;
+            }
+            let c = Contact { i, other: o, delta, k: self.stiffness(i, o) };
+            let p = Self::force_of(&c, delta).0;
+            p_out[k] = p;
+            f[i] -= g.e * p;
+            if let Other::Particle(j) = o {
+                f[j] += g.e * p;
+            }
+            sum += p;
+            cnt += 1;
         }
         (f, if cnt > 0 { sum / cnt as f64 } else { 0.0 })
     }
 
     /// Pre-relaxation of a packing that is not in equilibrium (e.g. a DEM snapshot in motion):
     /// FIRE energy minimisation (Bitzek et al., Phys. Rev. Lett. 97 (2006) 170201) with plain Hertz
-    /// contacts, unit masses, at the current walls and body forces. Newton cannot do this job: far
-    /// from equilibrium the packing has to rearrange, which is a minimisation, not a root-finding
-    /// problem. Stops when max |net force| ≤ `ftol` × mean contact force or after `max_steps`.
-    /// Returns (steps, final relative residual). Clears the active set.
+    /// contacts, unit masses, at the current walls and body forces. See [`Self::relax`].
     pub fn relax_hertz(&mut self, max_steps: usize, ftol: f64) -> (usize, f64) {
+        self.relax(max_steps, ftol, false)
+    }
+
+    /// FIRE relaxation (Bitzek et al., Phys. Rev. Lett. 97 (2006) 170201, unit masses) at the current
+    /// walls and body forces. Newton cannot do this job: far from equilibrium the packing has to
+    /// rearrange, which is a minimisation, not a root-finding problem. With `nonlocal` the contact
+    /// law is the nonlocal relation with the approach lagged by one FIRE step (the fixed-point
+    /// iteration that standard multi-contact performs in the DEM, SPEC §4 (b)); without it, plain
+    /// Hertz. Stops when max |net force| ≤ `ftol` × mean contact force or after `max_steps`.
+    /// Returns (steps, final relative residual). The active set is replaced by the loaded contacts
+    /// of the relaxed state (with their lagged Hertz overlaps), a warm start for Newton.
+    pub fn relax(&mut self, max_steps: usize, ftol: f64, nonlocal: bool) -> (usize, f64) {
         let n = self.x.len();
+        let nw = self.walls.len();
         let mut x = self.x.clone();
         let mut v = vec![Vec3::zeros(); n];
         let (dt0, dt_max): (f64, f64) = (0.05, 0.5);
@@ -903,7 +1027,10 @@ impl Nonlocal {
         let mut candidates: Vec<(usize, usize)> = Vec::new();
         let mut x_list = x.clone();
         let rmax = self.r.iter().cloned().fold(0.0, f64::max);
+        let rmin = self.r.iter().cloned().fold(f64::INFINITY, f64::min);
         let skin = 0.3 * rmax;
+        // Contacts whose geometric gap is below this may be closed by the nonlocal bulge.
+        let margin = if nonlocal && !self.kernel.is_zero() { 0.2 * rmin } else { 0.0 };
         let rebuild = |x: &[Vec3], c: &mut Vec<(usize, usize)>| {
             c.clear();
             for i in 0..n {
@@ -914,21 +1041,61 @@ impl Nonlocal {
                 }
             }
         };
+        // The lagged forces start from the current active set.
+        let saved_kernel = self.kernel;
+        if !nonlocal {
+            self.kernel = Kernel::new(crate::nonlocal::KernelKind::None, 0.0).unwrap_or(saved_kernel);
+        }
+        let start: std::collections::HashMap<(usize, Other), f64> = self
+            .contacts
+            .iter()
+            .map(|c| ((c.i, c.other), Self::force_of(c, c.delta).0))
+            .collect();
         rebuild(&x, &mut candidates);
-        let mut rel = f64::INFINITY;
+        let index_of = |c: &[(usize, usize)], map: &std::collections::HashMap<(usize, Other), f64>| {
+            let mut lag = vec![0.0; c.len() + n * nw];
+            for (k, &(i, j)) in c.iter().enumerate() {
+                lag[k] = map.get(&(i, Other::Particle(j))).copied().unwrap_or(0.0);
+            }
+            for i in 0..n {
+                for w in 0..nw {
+                    lag[c.len() + i * nw + w] = map.get(&(i, Other::Wall(w))).copied().unwrap_or(0.0);
+                }
+            }
+            lag
+        };
+        let mut lag = index_of(&candidates, &start);
+        let mut p = vec![0.0; lag.len()];
+        let mut d = vec![0.0; lag.len()];
+        let mut rel;
         let mut step = 0;
-        while step < max_steps {
-            step += 1;
+        loop {
             if x.iter().zip(&x_list).any(|(a, b)| (a - b).norm() > 0.5 * skin) {
+                let np = candidates.len();
+                let map: std::collections::HashMap<(usize, Other), f64> = (0..lag.len())
+                    .filter(|&k| lag[k] > 0.0)
+                    .map(|k| {
+                        if k < np {
+                            ((candidates[k].0, Other::Particle(candidates[k].1)), lag[k])
+                        } else {
+                            (((k - np) / nw, Other::Wall((k - np) % nw)), lag[k])
+                        }
+                    })
+                    .collect();
                 rebuild(&x, &mut candidates);
                 x_list = x.clone();
+                lag = index_of(&candidates, &map);
+                p = vec![0.0; lag.len()];
+                d = vec![0.0; lag.len()];
             }
-            let (f, pmean) = self.hertz_forces(&x, &candidates);
+            let (f, pmean) = self.fire_forces(&x, &candidates, &lag, margin, &mut p, &mut d);
+            std::mem::swap(&mut lag, &mut p);
             let fmax = f.iter().map(|f| f.norm()).fold(0.0, f64::max);
             rel = fmax / pmean.max(FORCE_FLOOR);
-            if rel <= ftol {
+            if rel <= ftol || step >= max_steps {
                 break;
             }
+            step += 1;
             let power: f64 = f.iter().zip(&v).map(|(f, v)| f.dot(v)).sum();
             let fnorm = f.iter().map(|f| f.norm_squared()).sum::<f64>().sqrt();
             let vnorm = v.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
@@ -958,8 +1125,25 @@ impl Nonlocal {
                 x[i] += dx;
             }
         }
+        self.kernel = saved_kernel;
+        // Warm start for Newton: the loaded contacts with their (lagged) Hertz overlaps.
+        let np = candidates.len();
+        self.contacts = (0..lag.len())
+            .filter(|&k| lag[k] > 0.0)
+            .map(|k| {
+                let (i, o) = if k < np {
+                    (candidates[k].0, Other::Particle(candidates[k].1))
+                } else {
+                    ((k - np) / nw, Other::Wall((k - np) % nw))
+                };
+                Contact { i, other: o, delta: d[k], k: self.stiffness(i, o) }
+            })
+            .collect();
+        if !nonlocal {
+            // Hertz relaxation: Newton re-derives the overlaps with the nonlocal terms.
+            self.contacts.clear();
+        }
         self.x = x;
-        self.contacts.clear();
         (step, rel)
     }
 
