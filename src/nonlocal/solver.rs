@@ -1112,7 +1112,11 @@ impl Nonlocal {
             std::mem::swap(&mut lag, &mut p);
             let fmax = f.iter().map(|f| f.norm()).fold(0.0, f64::max);
             rel = fmax / pmean.max(FORCE_FLOOR);
-            if rel <= ftol || step >= max_steps {
+            // Below the force floor the packing is unjammed: relax on until every overlap has
+            // opened (all forces exactly zero, an exact equilibrium) rather than leave Newton a
+            // degenerate problem (P ∝ δ^{3/2} with dP/dδ → 0).
+            let unjammed = pmean < FORCE_FLOOR && fmax > 0.0;
+            if (rel <= ftol && !unjammed) || step >= max_steps {
                 break;
             }
             step += 1;
