@@ -45,6 +45,29 @@ enum Command {
         #[arg(long)]
         contacts: Option<PathBuf>,
     },
+    /// Piston compression of a packing by the nonlocal solver (the 514-particle hydrogel box by default)
+    Uniaxial {
+        /// Start state: LIGGGHTS/mcdem `dump custom` file with id radius x y z (last frame)
+        start: PathBuf,
+        /// Particle Poisson ratio (E = 23.3 kPa, walls 50 MPa / 0.5)
+        #[arg(long, default_value_t = 0.5)]
+        nu: f64,
+        /// Kernel: boussinesq | none | sphere
+        #[arg(long, default_value = "boussinesq")]
+        kernel: String,
+        /// Load steps from the start height to the end height
+        #[arg(long, default_value_t = 40)]
+        steps: usize,
+        /// Piston start height [m]
+        #[arg(long, default_value_t = mcdem::nonlocal::uniaxial::HYDROGEL_Z_START)]
+        z_start: f64,
+        /// Piston end height [m] (0.11578: φ = 0.85)
+        #[arg(long, default_value_t = 0.11578)]
+        z_end: f64,
+        /// Per-step CSV output (default: standard output)
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
     /// Speed of every engine and model on the same scenes, measured side by side (ratios)
     Bench {
         /// CI size: short strokes, smaller packings
@@ -168,6 +191,59 @@ fn calibrate(quick: bool, nus: Vec<f64>, out: PathBuf) -> Result<(), String> {
     Ok(())
 }
 
+#[allow(clippy::too_many_arguments)]
+fn uniaxial(
+    start: PathBuf,
+    nu: f64,
+    kernel: String,
+    steps: usize,
+    z_start: f64,
+    z_end: f64,
+    out: Option<PathBuf>,
+) -> Result<(), String> {
+    use mcdem::nonlocal::uniaxial::{self, Uniaxial};
+    let mut u = Uniaxial::hydrogel(nu, steps)?;
+    u.z_start = z_start;
+    u.z_end = z_end;
+    let spheres = mcdem::nonlocal::scene::read_liggghts_dump(&start, u.particle)?;
+    let kernel = mcdem::nonlocal::Kernel::new(kernel.parse()?, 1.0)?;
+    let clock = std::time::Instant::now();
+    let points = uniaxial::compress_with(&spheres, &u, kernel, &mut |p| {
+        eprintln!(
+            "step {}/{}: phi {:.4} sigma {:.4e} Pa Z {:.3} newton {} fire {} halvings {} residual {:.2e} ({:.2} s)",
+            p.step,
+            u.steps,
+            p.phi,
+            p.sigma_piston,
+            2.0 * p.contacts as f64 / spheres.len() as f64,
+            p.iterations,
+            p.fire_steps,
+            p.subdivisions,
+            p.residual,
+            p.seconds
+        )
+    })
+    .map_err(|e| e.to_string())?;
+    let secs = clock.elapsed().as_secs_f64();
+    let mut sink: Box<dyn std::io::Write> = match &out {
+        Some(p) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(p).map_err(|e| format!("cannot create {}: {e}", p.display()))?,
+        )),
+        None => Box::new(std::io::stdout().lock()),
+    };
+    uniaxial::write_csv(&mut *sink, &points, kernel, &u, &start.display().to_string())
+        .and_then(|_| sink.flush())
+        .map_err(|e| format!("cannot write output: {e}"))?;
+    let iters: usize = points.iter().map(|p| p.iterations).sum();
+    eprintln!("done: {} load steps, {iters} Newton iterations in {secs:.2} s", u.steps);
+    for (phi, z) in uniaxial::HYDROGEL_Z_PHI {
+        if let Some(s) = uniaxial::sigma_at_z(&points, z) {
+            eprintln!("sigma(phi = {phi:.2}, z = {z}) = {s:.4e} Pa");
+        }
+    }
+    Ok(())
+}
+
 fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), String> {
     let report = mcdem::bench::run(mcdem::bench::Options { quick }, &mut |l| eprintln!("{l}"))?;
     print!("{}", mcdem::bench::table(&report));
@@ -187,6 +263,9 @@ fn main() -> ExitCode {
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json } => bench(quick, json),
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
+        Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, out } => {
+            uniaxial(start, nu, kernel, steps, z_start, z_end, out)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

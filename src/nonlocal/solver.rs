@@ -819,11 +819,31 @@ impl Nonlocal {
         }
         let predicted_x = self.x.clone();
         let result = if self.settings.fire_first && self.settings.fire_fallback_steps > 0 {
+            // FIRE to 1e-4, Newton on a short budget; if Newton fails (a nearly floppy particle far
+            // from its equilibrium), FIRE again to 1e-7 from the prediction, Newton with the full
+            // budget.
             let (fire_steps, _) = self.relax(self.settings.fire_fallback_steps, 1e-4, true);
-            self.solve().map(|mut s| {
-                s.fire_steps += fire_steps;
-                s
-            })
+            // From a relaxed state Newton converges in a few iterations or not at all.
+            let full = self.settings;
+            self.settings.max_newton = full.max_newton.min(12);
+            self.settings.max_active_rounds = full.max_active_rounds.min(4);
+            let first = self.solve();
+            self.settings = full;
+            match first {
+                Ok(mut s) => {
+                    s.fire_steps += fire_steps;
+                    Ok(s)
+                }
+                Err(_) => {
+                    self.x = predicted_x;
+                    self.contacts = saved_c.clone();
+                    let (more, _) = self.relax(self.settings.fire_fallback_steps, 1e-7, true);
+                    self.solve().map(|mut s| {
+                        s.fire_steps += fire_steps + more;
+                        s
+                    })
+                }
+            }
         } else {
             self.newton_then_fire(predicted_x)
         };
@@ -1092,7 +1112,11 @@ impl Nonlocal {
             std::mem::swap(&mut lag, &mut p);
             let fmax = f.iter().map(|f| f.norm()).fold(0.0, f64::max);
             rel = fmax / pmean.max(FORCE_FLOOR);
-            if rel <= ftol || step >= max_steps {
+            // Below the force floor the packing is unjammed: relax on until every overlap has
+            // opened (all forces exactly zero, an exact equilibrium) rather than leave Newton a
+            // degenerate problem (P ∝ δ^{3/2} with dP/dδ → 0).
+            let unjammed = pmean < FORCE_FLOOR && fmax > 0.0;
+            if (rel <= ftol && !unjammed) || step >= max_steps {
                 break;
             }
             step += 1;

@@ -359,10 +359,19 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             }
             None => (None, f64::NAN, Curve::new()),
         };
-        let (ac, arun) = compress("0", GAMMA_ADVANCED, MPR_ADVANCED, nu, &s, &data)?;
-        let ae = error(&ac, &refc);
-        push_curve(rows, "mc_advanced", format!("nu={nu} gamma={GAMMA_ADVANCED} mpr={MPR_ADVANCED}"), &ac);
-        summary(models, format!("mc_advanced nu={nu}"), ae, &arun);
+        // An unstable advanced-MC run is a finding (reported, target missed), not a failed case.
+        let (ac, ae) = match compress("0", GAMMA_ADVANCED, MPR_ADVANCED, nu, &s, &data) {
+            Ok((ac, arun)) => {
+                let ae = error(&ac, &refc);
+                push_curve(rows, "mc_advanced", format!("nu={nu} gamma={GAMMA_ADVANCED} mpr={MPR_ADVANCED}"), &ac);
+                summary(models, format!("mc_advanced nu={nu}"), ae, &arun);
+                (ac, ae)
+            }
+            Err(e) => {
+                unstable.push(format!("ν = {nu}, advanced MC γ = {GAMMA_ADVANCED} MPR = {MPR_ADVANCED}: {e}"));
+                (Curve::new(), f64::NAN)
+            }
+        };
         let ordered = ae < se && se < he;
         targets.push(Target {
             name: format!("nu = {nu}: NRMSE advanced MC < standard MC < Hertz"),
@@ -418,7 +427,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         nrmse_rows.push(r.nrmse);
     }
     for u in &unstable {
-        let _ = writeln!(md, "- unstable (ends the ladder): {u}");
+        let _ = writeln!(md, "- unstable: {u}");
     }
     // Fig. 4 analogue: NRMSE against ν.
     let pick = |k: usize| -> Curve { nrmse_rows.iter().map(|r| (r.0, 100.0 * [r.1, r.2, r.3][k])).collect() };
