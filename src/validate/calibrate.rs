@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::uniaxial::{self, Setup, E_HYDROGEL};
-use crate::nonlocal::{Kernel, KernelKind};
+use crate::nonlocal::KernelKind;
 
 #[derive(Debug, Clone)]
 pub struct Options {
@@ -148,11 +148,7 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
         }
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| format!("cannot create {}: {e}", opts.out.display()))?;
-    let kind = if Kernel::new(KernelKind::Sphere, 1.0).is_ok() {
-        KernelKind::Sphere
-    } else {
-        KernelKind::Boussinesq
-    };
+    let kind = s.kernel;
     let scratch = super::runner::Scratch::new()?;
     let scratch = &scratch.0;
     let bar = indicatif::ProgressBar::new_spinner();
