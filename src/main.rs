@@ -64,6 +64,10 @@ enum Command {
         /// Piston end height [m] (0.11578: φ = 0.85)
         #[arg(long, default_value_t = 0.11578)]
         z_end: f64,
+        /// Solid volume for φ [m³] (default: the hydrogel packing's 2.695884e-3; `spheres`: sum of
+        /// the sphere volumes of the start file)
+        #[arg(long)]
+        solid_volume: Option<String>,
         /// Per-step CSV output (default: standard output)
         #[arg(long, short)]
         out: Option<PathBuf>,
@@ -199,6 +203,7 @@ fn uniaxial(
     steps: usize,
     z_start: f64,
     z_end: f64,
+    solid_volume: Option<String>,
     out: Option<PathBuf>,
 ) -> Result<(), String> {
     use mcdem::nonlocal::uniaxial::{self, Uniaxial};
@@ -206,6 +211,20 @@ fn uniaxial(
     u.z_start = z_start;
     u.z_end = z_end;
     let spheres = mcdem::nonlocal::scene::read_liggghts_dump(&start, u.particle)?;
+    match solid_volume.as_deref() {
+        None => {}
+        Some("spheres") => {
+            u.solid_volume =
+                spheres.iter().map(|s| 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3)).sum();
+        }
+        Some(v) => {
+            u.solid_volume = v
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .ok_or_else(|| format!("--solid-volume {v}: expected a volume > 0 or 'spheres'"))?;
+        }
+    }
     let kernel = mcdem::nonlocal::Kernel::new(kernel.parse()?, 1.0)?;
     let clock = std::time::Instant::now();
     let points = uniaxial::compress_with(&spheres, &u, kernel, &mut |p| {
@@ -263,8 +282,8 @@ fn main() -> ExitCode {
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json } => bench(quick, json),
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
-        Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, out } => {
-            uniaxial(start, nu, kernel, steps, z_start, z_end, out)
+        Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, solid_volume, out } => {
+            uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)
         }
     };
     match result {

@@ -186,16 +186,18 @@ pub fn read_liggghts_dump(path: &Path, material: Material) -> Result<Vec<Sphere>
         .ok_or_else(|| format!("{}: no 'ITEM: ATOMS' header", path.display()))?;
     let names: Vec<&str> = frame[head_at]["ITEM: ATOMS".len()..].split_whitespace().collect();
     let col = |name: &str| names.iter().position(|c| *c == name);
-    let need = |name: &str| col(name).ok_or_else(|| format!("{}: dump has no '{name}' column", path.display()));
+    let need =
+        |name: &str| col(name).ok_or_else(|| format!("{}: dump has no '{name}' column", path.display()));
     let (ci, cx, cy, cz) = (need("id")?, need("x")?, need("y")?, need("z")?);
     let (cr, scale) = match (col("radius"), col("diameter")) {
         (Some(c), _) => (c, 1.0),
         (None, Some(c)) => (c, 0.5),
         _ => return Err(format!("{}: dump has neither 'radius' nor 'diameter'", path.display())),
     };
-    let rows = frame.get(head_at + 1..head_at + 1 + n).filter(|r| r.len() == n).ok_or_else(|| {
-        format!("{}: the last frame announces {n} atoms but is shorter", path.display())
-    })?;
+    let rows = frame
+        .get(head_at + 1..head_at + 1 + n)
+        .filter(|r| r.len() == n)
+        .ok_or_else(|| format!("{}: the last frame announces {n} atoms but is shorter", path.display()))?;
     let mut out = Vec::with_capacity(n);
     for (k, line) in rows.iter().enumerate() {
         let w: Vec<&str> = line.split_whitespace().collect();

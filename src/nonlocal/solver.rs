@@ -988,7 +988,9 @@ impl Nonlocal {
             adj[s]
                 .iter()
                 .filter(|(k, _)| *k != c)
-                .map(|(k, e)| self.kernel.compliance(dir.dot(e), self.e[s], self.nu[s], self.r[s]).0 * lag[*k])
+                .map(|(k, e)| {
+                    self.kernel.compliance(dir.dot(e), self.e[s], self.nu[s], self.r[s]).0 * lag[*k]
+                })
                 .sum()
         };
         let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
@@ -1066,11 +1068,8 @@ impl Nonlocal {
         if !nonlocal {
             self.kernel = Kernel::new(crate::nonlocal::KernelKind::None, 0.0).unwrap_or(saved_kernel);
         }
-        let start: std::collections::HashMap<(usize, Other), f64> = self
-            .contacts
-            .iter()
-            .map(|c| ((c.i, c.other), Self::force_of(c, c.delta).0))
-            .collect();
+        let start: std::collections::HashMap<(usize, Other), f64> =
+            self.contacts.iter().map(|c| ((c.i, c.other), Self::force_of(c, c.delta).0)).collect();
         rebuild(&x, &mut candidates);
         let index_of = |c: &[(usize, usize)], map: &std::collections::HashMap<(usize, Other), f64>| {
             let mut lag = vec![0.0; c.len() + n * nw];

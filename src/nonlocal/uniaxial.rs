@@ -137,7 +137,8 @@ pub fn compress_with(
         })?;
         let f = solver.wall_forces();
         let ws = solver.walls();
-        let normal = |w: usize| -f[w].dot(&ws[w].normal);
+        // (+ 0.0 turns the −0 of a force-free wall into 0.)
+        let normal = |w: usize| -f[w].dot(&ws[w].normal) + 0.0;
         let z = u.z_at(k);
         let (mut pp, mut pw) = (0, 0);
         for c in solver.contacts() {
