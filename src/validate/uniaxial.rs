@@ -9,25 +9,24 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
+use std::time::Instant;
 
 use rayon::prelude::*;
-use serde_json::json;
 
 use super::runner::{self, DeckRun};
 use super::{CaseResult, ModelSummary, Options, Row, Target};
-use crate::nonlocal::scene::Scene;
-use crate::nonlocal::KernelKind;
+use crate::nonlocal::{Kernel, KernelKind};
 use crate::outputs::nrmse;
 
 const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
-/// Box of the example [m], solid volume [m³] (SPEC §5 item 2).
-const LX: f64 = 0.165190844117647;
-const LY: f64 = 0.165833589215686;
-const SOLID_VOLUME: f64 = 2.695884e-3;
-/// Piston start, the example's end, and the end for φ = 0.85 [m].
-const Z0: f64 = 0.1676430125;
+/// Box, solid volume and piston start of the example (SPEC §5 item 2), shared with the solver.
+use crate::nonlocal::uniaxial::{
+    HYDROGEL_LX as LX, HYDROGEL_LY as LY, HYDROGEL_SOLID_VOLUME as SOLID_VOLUME, HYDROGEL_Z_PHI,
+    HYDROGEL_Z_START as Z0,
+};
+/// The example deck's piston end, and the end for φ = 0.85 [m].
 const Z_EXAMPLE: f64 = 0.1375165625;
-const Z_END: f64 = 0.11578;
+const Z_END: f64 = HYDROGEL_Z_PHI[4].1;
 const DT: f64 = 1e-5;
 /// φ from which the error is measured.
 const PHI_MIN: f64 = 0.66;
@@ -51,7 +50,13 @@ pub struct Setup {
 pub fn setup(quick: bool) -> Setup {
     if quick {
         // 4× the piston speed and two ν: a smoke test of the whole chain, not the paper's numbers.
-        Setup { nus: vec![0.3, 0.5], stroke: 7500, every: 50, nonlocal_steps: 40, kernel: KernelKind::Boussinesq }
+        Setup {
+            nus: vec![0.3, 0.5],
+            stroke: 7500,
+            every: 50,
+            nonlocal_steps: 40,
+            kernel: KernelKind::Boussinesq,
+        }
     } else {
         Setup {
             nus: vec![0.25, 0.30, 0.35, 0.40, 0.45, 0.50],
@@ -206,45 +211,14 @@ pub fn compress_e(
 
 /// The nonlocal reference from the state file: walls of the box, piston from its start height
 /// down to `Z_END`, gravity off.
-pub fn reference(
-    state: &Path,
-    nu: f64,
-    kind: KernelKind,
-    steps: usize,
-) -> Result<(Vec<(f64, f64)>, f64), String> {
-    let scene = json!({
-        "liggghts_dump": state,
-        "particle_material": {"youngs_modulus": 23.3e3, "poisson_ratio": nu},
-        "wall_material": {"youngs_modulus": 50e6, "poisson_ratio": 0.5},
-        "kernel": kind.name(),
-        "walls": [
-            {"name": "bottom", "point": [0, 0, 0], "normal": [0, 0, 1]},
-            {"name": "xlo", "point": [0, 0, 0], "normal": [1, 0, 0]},
-            {"name": "xhi", "point": [LX, 0, 0], "normal": [-1, 0, 0]},
-            {"name": "ylo", "point": [0, 0, 0], "normal": [0, 1, 0]},
-            {"name": "yhi", "point": [0, LY, 0], "normal": [0, -1, 0]},
-            {"name": "piston", "point": [0, 0, Z0], "normal": [0, 0, -1], "displacement": [0, 0, Z_END - Z0]}
-        ],
-        "solid_volume": SOLID_VOLUME,
-        "steps": steps
-    });
-    let mut sc = Scene::from_json(&scene.to_string(), Path::new("."))?;
-    let mut csv = Vec::new();
-    let summary = sc.run(&mut csv, None, &mut |_| {})?;
-    let text = String::from_utf8_lossy(&csv);
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    let header: Vec<&str> = lines.next().ok_or("nonlocal: empty output")?.split(',').collect();
-    let col =
-        |name: &str| header.iter().position(|h| *h == name).ok_or(format!("nonlocal: no column {name}"));
-    let (cp, cf) = (col("piston_position")?, col("piston_force")?);
-    let curve = lines
-        .map(|l| {
-            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect();
-            // piston_position is the offset along the inward normal −z: −z_piston.
-            (phi_of(-v[cp]), v[cf] / (LX * LY))
-        })
-        .collect();
-    Ok((curve, summary.wall_seconds))
+pub fn reference(state: &Path, nu: f64, kind: KernelKind, steps: usize) -> Result<(Curve, f64), String> {
+    use crate::nonlocal::uniaxial::{compress, Uniaxial};
+    let u = Uniaxial::hydrogel(nu, steps)?;
+    let spheres = crate::nonlocal::scene::read_liggghts_dump(state, u.particle)?;
+    let t = Instant::now();
+    let points = compress(&spheres, &u, Kernel::new(kind, 1.0)?)
+        .map_err(|e| format!("nonlocal reference (kernel {}, nu {nu}): {e}", kind.name()))?;
+    Ok((points.iter().map(|p| (p.phi, p.sigma_piston)).collect(), t.elapsed().as_secs_f64()))
 }
 
 /// NRMSE of `model` against `reference` at the reference points with φ ≥ `PHI_MIN`.
@@ -368,12 +342,18 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         let (ac, ae) = match compress("0", GAMMA_ADVANCED, MPR_ADVANCED, nu, &s, &data) {
             Ok((ac, arun)) => {
                 let ae = error(&ac, &refc);
-                push_curve(rows, "mc_advanced", format!("nu={nu} gamma={GAMMA_ADVANCED} mpr={MPR_ADVANCED}"), &ac);
+                push_curve(
+                    rows,
+                    "mc_advanced",
+                    format!("nu={nu} gamma={GAMMA_ADVANCED} mpr={MPR_ADVANCED}"),
+                    &ac,
+                );
                 summary(models, format!("mc_advanced nu={nu}"), ae, &arun);
                 (ac, ae)
             }
             Err(e) => {
-                unstable.push(format!("ν = {nu}, advanced MC γ = {GAMMA_ADVANCED} MPR = {MPR_ADVANCED}: {e}"));
+                unstable
+                    .push(format!("ν = {nu}, advanced MC γ = {GAMMA_ADVANCED} MPR = {MPR_ADVANCED}: {e}"));
                 (Curve::new(), f64::NAN)
             }
         };
