@@ -35,6 +35,8 @@ fn quick_bench_writes_rows_and_ratios() {
     for model in ["hertz", "mc_advanced"] {
         assert!(has("rust", model, "packing_phi0.8_N2048"), "packing {model}");
     }
+    // The nonlocal solver's row: the 514-particle compression to phi = 0.85.
+    assert!(has("rust", "nonlocal_boussinesq", "nonlocal_514"), "nonlocal row");
     let ratios = v["ratios"].as_object().unwrap();
     if std::path::Path::new(
         "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact",

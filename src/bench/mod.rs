@@ -8,6 +8,7 @@
 
 mod hydrogel;
 mod kernel;
+mod nonlocal;
 mod packing;
 
 use std::collections::BTreeMap;
@@ -55,6 +56,7 @@ pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
     kernel::rows(opts, &mut report, say);
     packing::rows(opts, &mut report, say)?;
     hydrogel::rows(opts, &mut report, say)?;
+    nonlocal::rows(opts, &mut report, say)?;
     ratios(&mut report);
     Ok(report)
 }
