@@ -19,7 +19,6 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::fit;
@@ -167,17 +166,20 @@ pub struct RunResult {
     pub z: f64,
     /// −σ_xy / k_n (positive under positive γ̇) and the effective friction −σ_xy / p.
     pub shear_stress_hat: f64,
+    #[serde(deserialize_with = "null_is_nan")]
     pub mu_eff: f64,
     /// Steady state found before strain_max?
     pub steady: bool,
     /// Strain at which the steady state was declared, and the averaged strain interval (the
     /// last block of the test and the windows after it).
+    #[serde(deserialize_with = "null_is_nan")]
     pub strain_steady: f64,
     pub strain_avg_from: f64,
     pub strain_avg_to: f64,
     /// Mean p̂ of every window (the steady-state test's input).
     pub window_p_hat: Vec<f64>,
     /// Relative standard error of p̂ from the averaged window means.
+    #[serde(deserialize_with = "null_is_nan")]
     pub p_hat_rel_err: f64,
     pub gamma_dot: f64,
     pub dt: f64,
@@ -185,6 +187,11 @@ pub struct RunResult {
     pub steps: u64,
     pub wall_s: f64,
     pub particle_steps_per_s: f64,
+}
+
+/// JSON has no NaN: serde_json writes it as null; read null back as NaN.
+fn null_is_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 struct Rng(u64);
@@ -251,7 +258,7 @@ fn prepare(spec: &RunSpec, compress_steps: u64) -> Result<(World, f64), String> 
     let l = (vs / spec.phi).cbrt();
     let phi0 = spec.phi.min(PHI_START);
     let l0 = (vs / phi0).cbrt();
-    let mut rng = Rng(spec.seed ^ 0x5eed_0f_5ea4);
+    let mut rng = Rng(spec.seed ^ 0x005e_ed0f_5ea4);
     let xs = random_positions(spec.n, l0, d, &mut rng)?;
     let mut w = World::new();
     w.domain = Some(Domain::new(Vec3::zeros(), Vec3::repeat(l0), [true; 3]));
@@ -608,13 +615,20 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
     let proto = &opts.grid.protocol;
     let mut done: Vec<RunResult> = Vec::new();
     let mut todo: Vec<RunSpec> = Vec::new();
+    let mut failed = Vec::new();
     for s in specs {
-        match read_json::<RunResult>(&runs_dir.join(format!("{}.json", s.key()))) {
+        let key = s.key();
+        if let Ok(e) = std::fs::read_to_string(runs_dir.join(format!("{key}.failed"))) {
+            // A run that stopped (deterministic): not retried; delete the file to retry it.
+            failed.push((key, e.trim().to_string()));
+            continue;
+        }
+        match read_json::<RunResult>(&runs_dir.join(format!("{key}.json"))) {
             Some(r) if r.spec == s && &r.protocol == proto => done.push(r),
             _ => todo.push(s),
         }
     }
-    let skipped = done.len();
+    let skipped = done.len() + failed.len();
     let total = todo.len();
     say(&format!(
         "shear study '{}': {} runs to do, {} already finished in {}",
@@ -625,47 +639,36 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
     ));
     // Longest first (slow shear rates), so the two threads finish together.
     todo.sort_by(|a, b| a.gamma_hat.total_cmp(&b.gamma_hat).then(b.phi.total_cmp(&a.phi)));
-    let counter = AtomicUsize::new(0);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.threads.max(1))
-        .build()
-        .map_err(|e| e.to_string())?;
-    let outcomes: Vec<Result<RunResult, (String, String)>> = pool.install(|| {
-        todo.par_iter()
-            .with_max_len(1)
-            .map(|s| {
-                let r = single_thread(|| run_one(s, proto)).and_then(|r| r);
-                let k = counter.fetch_add(1, Ordering::Relaxed) + 1;
-                match r {
-                    Ok(r) => {
-                        let text = serde_json::to_string_pretty(&r).map_err(|e| (s.key(), e.to_string()))?;
-                        write_atomic(&runs_dir.join(format!("{}.json", s.key())), &text)
-                            .map_err(|e| (s.key(), e))?;
-                        say(&format!(
-                            "[{k}/{total}] φ {:.3} μ {} ν {} γ̂ {:.1e}: p̂ {:.4e} (kin {:.2e}) Z {:.2} {} strain {:.2}, {:.1} s, {:.2e} particle-steps/s",
-                            s.phi,
-                            s.mu,
-                            s.nu,
-                            s.gamma_hat,
-                            r.p_hat,
-                            r.p_hat_kinetic,
-                            r.z,
-                            if r.steady { "steady at" } else { "NOT steady by" },
-                            if r.steady { r.strain_steady } else { r.strain_avg_to },
-                            r.wall_s,
-                            r.particle_steps_per_s
-                        ));
-                        Ok(r)
+    // Exactly `threads` runs at a time: plain worker threads take the next run from a shared
+    // index, and each runs it inside its own one-thread pool (the engine's pair loop then stays
+    // serial). A rayon pool of pools would let a waiting worker start further runs.
+    let next = AtomicUsize::new(0);
+    let finished = AtomicUsize::new(0);
+    let outcomes: Vec<Result<RunResult, (String, String)>> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..opts.threads.max(1))
+            .map(|_| {
+                scope.spawn(|| -> Vec<Result<RunResult, (String, String)>> {
+                    let mut mine = Vec::new();
+                    let pool = match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                        Ok(p) => p,
+                        Err(e) => {
+                            mine.push(Err(("thread pool".to_string(), e.to_string())));
+                            return mine;
+                        }
+                    };
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(s) = todo.get(i) else { break };
+                        let r = pool.install(|| run_one(s, proto));
+                        let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                        mine.push(finish(s, r, k, total, &runs_dir, say));
                     }
-                    Err(e) => {
-                        say(&format!("[{k}/{total}] {} failed: {e}", s.key()));
-                        Err((s.key(), e))
-                    }
-                }
+                    mine
+                })
             })
-            .collect()
+            .collect();
+        workers.into_iter().flat_map(|w| w.join().unwrap_or_default()).collect()
     });
-    let mut failed = Vec::new();
     let ran = outcomes.iter().filter(|o| o.is_ok()).count();
     for o in outcomes {
         match o {
@@ -680,8 +683,45 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
     });
     let cost = cost_rows(opts, say)?;
     let (surface, phi_c) = response_surface(&opts.grid, &done);
-    write_outputs(opts, &done, &surface, &phi_c, &cost)?;
+    write_outputs(opts, &done, &failed, &surface, &phi_c, &cost)?;
     Ok(Summary { ran, skipped, failed, results: done, surface, phi_c, cost })
+}
+
+/// Stores a finished run (JSON) and reports it.
+fn finish(
+    s: &RunSpec,
+    r: Result<RunResult, String>,
+    k: usize,
+    total: usize,
+    runs_dir: &Path,
+    say: &(dyn Fn(&str) + Sync),
+) -> Result<RunResult, (String, String)> {
+    match r {
+        Ok(r) => {
+            let text = serde_json::to_string_pretty(&r).map_err(|e| (s.key(), e.to_string()))?;
+            write_atomic(&runs_dir.join(format!("{}.json", s.key())), &text).map_err(|e| (s.key(), e))?;
+            say(&format!(
+                "[{k}/{total}] φ {:.3} μ {} ν {} γ̂ {:.1e}: p̂ {:.4e} (kin {:.2e}) Z {:.2} {} strain {:.2}, {:.1} s, {:.2e} particle-steps/s",
+                s.phi,
+                s.mu,
+                s.nu,
+                s.gamma_hat,
+                r.p_hat,
+                r.p_hat_kinetic,
+                r.z,
+                if r.steady { "steady at" } else { "NOT steady by" },
+                if r.steady { r.strain_steady } else { r.strain_avg_to },
+                r.wall_s,
+                r.particle_steps_per_s
+            ));
+            Ok(r)
+        }
+        Err(e) => {
+            say(&format!("[{k}/{total}] {} failed: {e}", s.key()));
+            let _ = write_atomic(&runs_dir.join(format!("{}.failed", s.key())), &format!("{e}\n"));
+            Err((s.key(), e))
+        }
+    }
 }
 
 /// Cost per particle-step at growing N (one grid point, single thread, short shear after a short
@@ -853,6 +893,7 @@ fn rel(a: f64, b: f64) -> String {
 fn write_outputs(
     opts: &Options,
     results: &[RunResult],
+    failed: &[(String, String)],
     surface: &[SurfaceRow],
     phi_c: &BTreeMap<String, f64>,
     cost: &[CostRow],
@@ -925,7 +966,7 @@ fn write_outputs(
         w("cost.csv", &cs)?;
     }
     let plots = plots(opts, results, surface, cost)?;
-    w("report.md", &report(opts, results, surface, phi_c, cost, &plots))
+    w("report.md", &report(opts, results, failed, surface, phi_c, cost, &plots))
 }
 
 fn plots(
@@ -971,16 +1012,16 @@ fn plots(
                     .collect()
             };
             for (stem, ylabel, q, logy) in [
-                ("p_vs_rate", "p̂ = p / k_n", (&|r: &RunResult| r.p_hat) as &dyn Fn(&RunResult) -> f64, true),
-                ("pkin_vs_rate", "kinetic p̂", &|r: &RunResult| r.p_hat_kinetic, true),
+                ("p_vs_rate", "p / k_n", (&|r: &RunResult| r.p_hat) as &dyn Fn(&RunResult) -> f64, true),
+                ("pkin_vs_rate", "kinetic p / k_n", &|r: &RunResult| r.p_hat_kinetic, true),
                 ("z_vs_rate", "Z", &|r: &RunResult| r.z, false),
             ] {
-                let title = format!("{ylabel} vs γ̂, μ = {mu}, ν = {nu}");
+                let title = format!("{ylabel} vs shear rate, μ = {mu}, ν = {nu}");
                 draw(
                     format!("{stem}_mu{mu}_nu{nu}.png"),
                     Chart {
                         title: &title,
-                        x_label: "γ̂ = γ̇ d / √(k_n/ρ)",
+                        x_label: "shear rate γ̇ d / √(k_n/ρ)",
                         y_label: ylabel,
                         log_x: true,
                         log_y: logy,
@@ -1005,9 +1046,13 @@ fn plots(
             }
             if let Some(r) = surface.iter().find(|r| r.mu == mu && r.nu == nu && r.alpha.is_finite()) {
                 let hi = g.phis.iter().copied().fold(0.0, f64::max);
-                let line: Vec<(f64, f64)> = (1..=60)
+                // From a little below the first fitted point (not from φ_c, where the curve dives).
+                let first =
+                    pts.get(&(key3(mu), key3(nu))).map_or(hi, |p| p.iter().map(|q| q.0).fold(hi, f64::min));
+                let lo = (first - 0.02).max(r.phi_c + 0.1 * (first - r.phi_c));
+                let line: Vec<(f64, f64)> = (0..=60)
                     .map(|k| {
-                        let phi = r.phi_c + (hi - r.phi_c) * (k as f64 / 60.0).powi(2);
+                        let phi = lo + (hi - lo) * k as f64 / 60.0;
                         (phi, r.alpha * (phi - r.phi_c).powf(r.beta))
                     })
                     .collect();
@@ -1022,10 +1067,10 @@ fn plots(
         if series.is_empty() {
             continue;
         }
-        let title = format!("quasi-static p̂ vs φ, μ = {mu}");
+        let title = format!("quasi-static p / k_n vs φ, μ = {mu}");
         draw(
             format!("p_vs_phi_mu{mu}.png"),
-            Chart { title: &title, x_label: "φ", y_label: "p̂", log_x: false, log_y: true, series },
+            Chart { title: &title, x_label: "φ", y_label: "p / k_n", log_x: false, log_y: true, series },
         )?;
     }
     // Fig. 12 style: α and β vs ν, ours (markers) and the paper's (lines).
@@ -1092,6 +1137,7 @@ fn plots(
 fn report(
     opts: &Options,
     results: &[RunResult],
+    failed: &[(String, String)],
     surface: &[SurfaceRow],
     phi_c: &BTreeMap<String, f64>,
     cost: &[CostRow],
@@ -1130,8 +1176,9 @@ fn report(
     let total_wall: f64 = results.iter().map(|r| r.wall_s).sum();
     let _ = writeln!(
         s,
-        "{} runs, {} reached the steady state; summed run wall time {:.0} s.\n",
+        "{} runs finished, {} stopped (listed below), {} reached the steady state; summed run wall time {:.0} s.\n",
         results.len(),
+        failed.len(),
         results.iter().filter(|r| r.steady).count(),
         total_wall
     );
@@ -1192,6 +1239,12 @@ fn report(
             r.wall_s,
             r.particle_steps_per_s
         );
+    }
+    if !failed.is_empty() {
+        let _ = writeln!(s, "\n## Runs that stopped\n\n| run | cause |\n|---|---|");
+        for (k, e) in failed {
+            let _ = writeln!(s, "| {k} | {} |", e.replace('|', "/"));
+        }
     }
     if !cost.is_empty() {
         let _ = writeln!(
