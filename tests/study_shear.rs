@@ -86,3 +86,16 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
     let surf = std::fs::read_to_string(below.out.join("response_surface.csv")).unwrap();
     assert!(surf.starts_with("mu,nu,phi_c,alpha,beta,alpha_paper,beta_paper"));
 }
+
+#[test]
+fn eq8_fit_recovers_synthetic_power_laws_with_shared_phi_c() {
+    use mcdem::study::fit::shared_phi_c;
+    let pc = 0.62;
+    let make = |a: f64, b: f64| -> Vec<(f64, f64)> {
+        [0.65, 0.7, 0.75, 0.8, 0.85].iter().map(|&phi| (phi, a * f64::powf(phi - pc, b))).collect()
+    };
+    let (fc, fits) = shared_phi_c(&[make(0.1, 0.5), make(0.3, 0.9)], 0.5).unwrap();
+    assert!((fc - pc).abs() < 1e-6, "{fc}");
+    assert!((fits[0].alpha - 0.1).abs() < 1e-5 && (fits[0].beta - 0.5).abs() < 1e-5, "{fits:?}");
+    assert!((fits[1].alpha - 0.3).abs() < 1e-5 && (fits[1].beta - 0.9).abs() < 1e-5, "{fits:?}");
+}

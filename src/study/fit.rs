@@ -84,20 +84,3 @@ pub fn shared_phi_c(sets: &[Vec<(f64, f64)>], lo: f64) -> Option<(f64, Vec<Power
     let fits = sets.iter().map(|s| power_law(s, pc)).collect::<Option<Vec<_>>>()?;
     Some((pc, fits))
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn recovers_synthetic_power_laws() {
-        let pc = 0.62;
-        let make = |a: f64, b: f64| -> Vec<(f64, f64)> {
-            [0.65, 0.7, 0.75, 0.8, 0.85].iter().map(|&phi| (phi, a * (phi - pc as f64).powf(b))).collect()
-        };
-        let (fc, fits) = shared_phi_c(&[make(0.1, 0.5), make(0.3, 0.9)], 0.5).unwrap();
-        assert!((fc - pc).abs() < 1e-6, "{fc}");
-        assert!((fits[0].alpha - 0.1).abs() < 1e-5 && (fits[0].beta - 0.5).abs() < 1e-5);
-        assert!((fits[1].alpha - 0.3).abs() < 1e-5 && (fits[1].beta - 0.9).abs() < 1e-5);
-    }
-}
