@@ -122,8 +122,8 @@ fn study(s: Study) -> Result<(), String> {
             let out = out.unwrap_or_else(|| PathBuf::from(format!("validation/shear_{grid}")));
             let opts = shear::Options { grid: g, out: out.clone(), threads };
             let sum = shear::run(&opts, &|l| eprintln!("{l}"))?;
-            for (mu, pc) in &sum.phi_c {
-                println!("mu {mu}: phi_c {pc:.4}");
+            for (mu, (pc, lo)) in &sum.phi_c {
+                println!("mu {mu}: phi_c {pc:.4} (searched from {lo})");
             }
             for r in &sum.surface {
                 println!(

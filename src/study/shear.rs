@@ -533,7 +533,8 @@ pub struct Summary {
     pub failed: Vec<(String, String)>,
     pub results: Vec<RunResult>,
     pub surface: Vec<SurfaceRow>,
-    pub phi_c: BTreeMap<String, f64>,
+    /// Per μ: fitted φ_c and the lower end of its search interval.
+    pub phi_c: BTreeMap<String, (f64, f64)>,
     pub cost: Vec<CostRow>,
 }
 
@@ -800,14 +801,34 @@ fn quasi_static(runs: &[&RunResult]) -> Option<f64> {
     let mut rs: Vec<&&RunResult> = runs.iter().collect();
     rs.sort_by(|a, b| a.spec.gamma_hat.total_cmp(&b.spec.gamma_hat));
     let slow = rs.first()?;
-    let qs = if rs.len() >= 2 {
-        let fast = rs[1];
-        let s = (fast.p_hat / slow.p_hat).ln() / (fast.spec.gamma_hat / slow.spec.gamma_hat).ln();
+    let qs = if let Some(s) = rate_exponent(runs) {
         s < 0.5
     } else {
         slow.p_hat / slow.spec.gamma_hat.powi(2) > 1e3
     };
     (qs && slow.p_hat > 0.0).then_some(slow.p_hat)
+}
+
+/// d ln p̂ / d ln γ̂ between the two slowest rates of one (μ, ν, φ) point (None with one rate).
+fn rate_exponent(runs: &[&RunResult]) -> Option<f64> {
+    let mut rs: Vec<&&RunResult> = runs.iter().collect();
+    rs.sort_by(|a, b| a.spec.gamma_hat.total_cmp(&b.spec.gamma_hat));
+    let (slow, fast) = (rs.first()?, rs.get(1)?);
+    Some((fast.p_hat / slow.p_hat).ln() / (fast.spec.gamma_hat / slow.spec.gamma_hat).ln())
+}
+
+/// Lower end of the φ_c search for one μ: the densest φ (any ν) that is clearly inertial
+/// (p̂ ∝ γ̂^s with s ≥ 1.5 between the two slowest rates); 0.5 when there is none.
+pub fn phi_c_floor(results: &[RunResult], mu: f64) -> f64 {
+    let mut groups: BTreeMap<(i64, i64), Vec<&RunResult>> = BTreeMap::new();
+    for r in results.iter().filter(|r| key3(r.spec.mu) == key3(mu)) {
+        groups.entry((key3(r.spec.nu), key3(r.spec.phi))).or_default().push(r);
+    }
+    groups
+        .values()
+        .filter(|runs| rate_exponent(runs).is_some_and(|s| s >= 1.5))
+        .map(|runs| runs[0].spec.phi)
+        .fold(0.5, f64::max)
 }
 
 type PointMap = BTreeMap<(i64, i64), Vec<(f64, f64)>>;
@@ -832,7 +853,10 @@ fn qs_points(results: &[RunResult]) -> PointMap {
 }
 
 /// Eq. 8 per (μ, ν), φ_c shared by all ν of one μ.
-pub fn response_surface(grid: &Grid, results: &[RunResult]) -> (Vec<SurfaceRow>, BTreeMap<String, f64>) {
+pub fn response_surface(
+    grid: &Grid,
+    results: &[RunResult],
+) -> (Vec<SurfaceRow>, BTreeMap<String, (f64, f64)>) {
     let pts = qs_points(results);
     let mut rows = Vec::new();
     let mut phi_c = BTreeMap::new();
@@ -843,9 +867,10 @@ pub fn response_surface(grid: &Grid, results: &[RunResult]) -> (Vec<SurfaceRow>,
             .map(|&nu| (nu, pts.get(&(key3(mu), key3(nu))).cloned().unwrap_or_default()))
             .collect();
         let usable: Vec<&(f64, Vec<(f64, f64)>)> = sets.iter().filter(|s| s.1.len() >= 3).collect();
-        let fitted = fit::shared_phi_c(&usable.iter().map(|s| s.1.clone()).collect::<Vec<_>>(), 0.5);
+        let floor = phi_c_floor(results, mu);
+        let fitted = fit::shared_phi_c(&usable.iter().map(|s| s.1.clone()).collect::<Vec<_>>(), floor);
         if let Some((pc, _)) = &fitted {
-            phi_c.insert(format!("{mu}"), *pc);
+            phi_c.insert(format!("{mu}"), (*pc, floor));
         }
         for (nu, set) in &sets {
             let (a_p, b_p) = paper_values(mu, *nu).unwrap_or((f64::NAN, f64::NAN));
@@ -895,7 +920,7 @@ fn write_outputs(
     results: &[RunResult],
     failed: &[(String, String)],
     surface: &[SurfaceRow],
-    phi_c: &BTreeMap<String, f64>,
+    phi_c: &BTreeMap<String, (f64, f64)>,
     cost: &[CostRow],
 ) -> Result<(), String> {
     let out = &opts.out;
@@ -1139,7 +1164,7 @@ fn report(
     results: &[RunResult],
     failed: &[(String, String)],
     surface: &[SurfaceRow],
-    phi_c: &BTreeMap<String, f64>,
+    phi_c: &BTreeMap<String, (f64, f64)>,
     cost: &[CostRow],
     plots: &[String],
 ) -> String {
@@ -1188,9 +1213,14 @@ fn report(
         "A (μ, ν, φ) point is quasi-static when p̂ grows slower than γ̂^0.5 between the two slowest rates \
          (one rate only: p̂/γ̂² > 10³); its slowest-rate p̂ enters the fit. φ_c is shared by all ν of one μ.\n"
     );
-    let _ = writeln!(s, "| μ | fitted φ_c |\n|---|---|");
-    for (mu, pc) in phi_c {
-        let _ = writeln!(s, "| {mu} | {pc:.4} |");
+    let _ = writeln!(
+        s,
+        "φ_c is searched between the densest clearly inertial φ of that μ (p̂ ∝ γ̂^s with s ≥ 1.5; 0.5 if none) \
+         and the loosest quasi-static φ.\n"
+    );
+    let _ = writeln!(s, "| μ | fitted φ_c | search from |\n|---|---|---|");
+    for (mu, (pc, lo)) in phi_c {
+        let _ = writeln!(s, "| {mu} | {pc:.4} | {lo} |");
     }
     let _ = writeln!(
         s,
