@@ -178,6 +178,11 @@ pub struct RunResult {
     pub strain_avg_to: f64,
     /// Mean p̂ of every window (the steady-state test's input).
     pub window_p_hat: Vec<f64>,
+    /// Share of the contacts seen by the multi-contact kernel whose correction the Eq. 3 cap
+    /// switched off (Hertz fallback), over the averaged windows (NaN in results written before it
+    /// was recorded).
+    #[serde(default = "nan", deserialize_with = "null_is_nan")]
+    pub mc_fallback_share: f64,
     /// Relative standard error of p̂ from the averaged window means.
     #[serde(deserialize_with = "null_is_nan")]
     pub p_hat_rel_err: f64,
@@ -187,6 +192,10 @@ pub struct RunResult {
     pub steps: u64,
     pub wall_s: f64,
     pub particle_steps_per_s: f64,
+}
+
+fn nan() -> f64 {
+    f64::NAN
 }
 
 /// JSON has no NaN: serde_json writes it as null; read null back as NaN.
@@ -308,6 +317,9 @@ struct Acc {
     pk: f64,
     sxy: f64,
     z: f64,
+    /// Multi-contact kernel counters over the window.
+    mc_contacts: u64,
+    mc_fallbacks: u64,
 }
 
 impl Acc {
@@ -317,6 +329,8 @@ impl Acc {
         self.pk += o.pk;
         self.sxy += o.sxy;
         self.z += o.z;
+        self.mc_contacts += o.mc_contacts;
+        self.mc_fallbacks += o.mc_fallbacks;
     }
     fn p(&self) -> f64 {
         (self.pc + self.pk) / self.n
@@ -331,6 +345,7 @@ fn sample(w: &World) -> Acc {
         pk: (sk[0][0] + sk[1][1] + sk[2][2]) / 3.0,
         sxy: 0.5 * (sc[0][1] + sc[1][0] + sk[0][1] + sk[1][0]),
         z: 2.0 * w.pair_contacts() as f64 / w.p.len() as f64,
+        ..Default::default()
     }
 }
 
@@ -357,6 +372,8 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
     let mut shear_steps = 0u64;
     loop {
         let mut acc = Acc::default();
+        w.mc_kernel_contacts = 0;
+        w.mc_kernel_fallbacks = 0;
         for s in 1..=steps_per_window {
             w.step().map_err(|e| format!("shear: {e}"))?;
             if s % every == 0 {
@@ -364,6 +381,8 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
             }
         }
         shear_steps += steps_per_window;
+        acc.mc_contacts = w.mc_kernel_contacts;
+        acc.mc_fallbacks = w.mc_kernel_fallbacks;
         windows.push(acc);
         let k = windows.len() - 1;
         let strain = (k + 1) as f64 * proto.window;
@@ -419,6 +438,11 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
         p_hat_contact: tot.pc / tot.n / kn,
         p_hat_kinetic: tot.pk / tot.n / kn,
         z: tot.z / tot.n,
+        mc_fallback_share: if tot.mc_contacts > 0 {
+            tot.mc_fallbacks as f64 / tot.mc_contacts as f64
+        } else {
+            f64::NAN
+        },
         shear_stress_hat: -sxy / kn,
         mu_eff: -sxy / p,
         steady: steady_at.is_some(),
@@ -927,13 +951,13 @@ fn write_outputs(
     let w = |name: &str, text: &str| write_atomic(&out.join(name), text);
     // runs.csv
     let mut csv = String::from(
-        "phi,mu,nu,gamma_hat,n,gamma_mc,mpr,restitution,p_hat,p_hat_contact,p_hat_kinetic,z,shear_stress_hat,mu_eff,steady,strain_steady,strain_avg_from,strain_avg_to,p_hat_rel_err,gamma_dot,dt,k_n,steps,wall_s,particle_steps_per_s\n",
+        "phi,mu,nu,gamma_hat,n,gamma_mc,mpr,restitution,p_hat,p_hat_contact,p_hat_kinetic,z,shear_stress_hat,mu_eff,steady,strain_steady,strain_avg_from,strain_avg_to,p_hat_rel_err,mc_fallback_share,gamma_dot,dt,k_n,steps,wall_s,particle_steps_per_s\n",
     );
     for r in results {
         let s = &r.spec;
         let _ = writeln!(
             csv,
-            "{},{},{},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.4e}",
+            "{},{},{},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.4e}",
             s.phi,
             s.mu,
             s.nu,
@@ -953,6 +977,7 @@ fn write_outputs(
             r.strain_avg_from,
             r.strain_avg_to,
             f(r.p_hat_rel_err),
+            f(r.mc_fallback_share),
             f(r.gamma_dot),
             f(r.dt),
             f(r.k_n),
@@ -1176,6 +1201,8 @@ fn report(
         s,
         "Advanced MC (γ = {}, MPR = {}, abs test), E = {} Pa, ρ = {} kg/m³, d = {} m, e = {}, N = {}. \
          k_n = 2E/(3(1−ν²)), p̂ = p/k_n, γ̂ = γ̇ d/√(k_n/ρ). Step = Hertz contact time at δ = {} d / {}. \
+         MC fallback share: of the contacts the multi-contact kernel saw (particles with two or more contacts), \
+         the share whose correction the Eq. 3 cap switched off. \
          Start: random sequential addition at φ = {}, affine compression to φ in {} steps, then Lees–Edwards shear. \
          Windows of strain {}; steady when the mean p of the last {} windows differs from that of the {} before by ≤ {} % \
          (not before strain {}; give up at {} and average the last windows); the last block and {} more windows are averaged.\n",
@@ -1245,13 +1272,13 @@ fn report(
     let _ = writeln!(s, "\n## Runs\n");
     let _ = writeln!(
         s,
-        "| μ | ν | φ | γ̂ | p̂ | contact p̂ | kinetic p̂ | Z | −σ̂_xy | μ_eff | steady at strain | averaged strain | rel. err | wall s | particle-steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "| μ | ν | φ | γ̂ | p̂ | contact p̂ | kinetic p̂ | Z | −σ̂_xy | μ_eff | MC fallback share | steady at strain | averaged strain | rel. err | wall s | particle-steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for r in results {
         let q = &r.spec;
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1e} | {:.3e} | {:.3e} | {:.2e} | {:.2} | {:.2e} | {:.3} | {} | {:.2}–{:.2} | {:.2} | {:.1} | {:.2e} |",
+            "| {} | {} | {} | {:.1e} | {:.3e} | {:.3e} | {:.2e} | {:.2} | {:.2e} | {:.3} | {:.3} | {} | {:.2}–{:.2} | {:.2} | {:.1} | {:.2e} |",
             q.mu,
             q.nu,
             q.phi,
@@ -1262,6 +1289,7 @@ fn report(
             r.z,
             r.shear_stress_hat,
             r.mu_eff,
+            r.mc_fallback_share,
             if r.steady { format!("{:.2}", r.strain_steady) } else { "not steady".into() },
             r.strain_avg_from,
             r.strain_avg_to,
