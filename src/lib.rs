@@ -16,4 +16,5 @@ pub mod liggghts;
 pub mod nonlocal;
 pub mod outputs;
 pub mod physics;
+pub mod study;
 pub mod validate;

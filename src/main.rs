@@ -93,6 +93,11 @@ enum Command {
         #[arg(long, default_value = "validation/report")]
         out: PathBuf,
     },
+    /// Parameter studies with the standalone engine
+    Study {
+        #[command(subcommand)]
+        study: Study,
+    },
     /// Run the validation suite and write the report
     Validate {
         /// Quick subset (CI)
@@ -105,6 +110,79 @@ enum Command {
         #[arg(long, default_value = "validation/report")]
         out: PathBuf,
     },
+}
+
+#[derive(Subcommand)]
+enum Study {
+    /// Lees–Edwards simple shear over (φ, μ, ν, γ̂) with the advanced MC law; Eq. 8 response surface
+    /// next to the paper's Tables D.1/D.2 (docs/shear.md). Resumable: finished runs are skipped.
+    Shear {
+        /// quick (a few minutes on two cores) or full (the paper's grid)
+        #[arg(long, value_parser = ["quick", "full"])]
+        grid: String,
+        /// Output directory (default validation/shear_<grid>)
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Particles per run (default: 250 quick, 2000 full)
+        #[arg(long)]
+        n: Option<usize>,
+        /// Geometric prefactor γ of Eq. 2 for every ν (default 1.125)
+        #[arg(long)]
+        gamma: Option<f64>,
+        /// Maximum penetration ratio of Eq. 3 (default 0.08)
+        #[arg(long)]
+        mpr: Option<f64>,
+        /// Runs side by side, one thread each (default 2)
+        #[arg(long, default_value_t = 2)]
+        threads: usize,
+        /// Skip the cost-vs-N measurement
+        #[arg(long)]
+        no_cost: bool,
+    },
+}
+
+fn study(s: Study) -> Result<(), String> {
+    match s {
+        Study::Shear { grid, out, n, gamma, mpr, threads, no_cost } => {
+            use mcdem::study::shear;
+            let mut g = if grid == "full" { shear::Grid::full() } else { shear::Grid::quick() };
+            if let Some(n) = n {
+                g.n = n;
+            }
+            if let Some(v) = gamma {
+                g.gamma_mc = v;
+            }
+            if let Some(v) = mpr {
+                g.mpr = v;
+            }
+            if no_cost {
+                g.cost_sizes.clear();
+            }
+            let out = out.unwrap_or_else(|| PathBuf::from(format!("validation/shear_{grid}")));
+            let opts = shear::Options { grid: g, out: out.clone(), threads };
+            let sum = shear::run(&opts, &|l| eprintln!("{l}"))?;
+            for (mu, (pc, lo)) in &sum.phi_c {
+                println!("mu {mu}: phi_c {pc:.4} (searched from {lo})");
+            }
+            for r in &sum.surface {
+                println!(
+                    "mu {} nu {}: alpha {:.4} (paper {:.4}) beta {:.4} (paper {:.4}) from {} points",
+                    r.mu, r.nu, r.alpha, r.alpha_paper, r.beta, r.beta_paper, r.points
+                );
+            }
+            println!("{} runs done now, {} skipped (already finished)", sum.ran, sum.skipped);
+            println!("report: {}", out.join("report.md").display());
+            if sum.failed.is_empty() {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{} run(s) failed: {}",
+                    sum.failed.len(),
+                    sum.failed.iter().map(|(k, e)| format!("{k}: {e}")).collect::<Vec<_>>().join("; ")
+                ))
+            }
+        }
+    }
 }
 
 fn read_input(file: &str) -> Result<String, String> {
@@ -285,6 +363,7 @@ fn main() -> ExitCode {
         Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, solid_volume, out } => {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)
         }
+        Command::Study { study: s } => study(s),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -321,6 +321,11 @@ pub struct World {
     /// decks that ask for LIGGGHTS' standard MC, so both engines give the same forces; the
     /// `mc_advanced` model uses the modified radii of both particles (SPEC §2).
     pub liggghts_radii: bool,
+    /// Multi-contact kernel counters since they were last zeroed (diagnostics): contacts the kernel
+    /// saw (particles with two or more contacts, touching or within the MC range) and those the
+    /// Eq. 3 cap switched back to Hertz.
+    pub mc_kernel_contacts: u64,
+    pub mc_kernel_fallbacks: u64,
 
     cells: CellList,
     cand: Vec<(u32, u32)>,
@@ -780,11 +785,13 @@ impl World {
                 self.fb_buf.resize(nl, false);
             }
             let res = radius_changes(&params, &self.loads, &mut self.dr_buf[..nl], &mut self.fb_buf[..nl]);
-            res.map_err(|e| StepError {
+            let summary = res.map_err(|e| StepError {
                 step: self.step,
                 particle: self.p.id[i],
                 cause: format!("multi-contact kernel: {e}"),
             })?;
+            self.mc_kernel_contacts += nl as u64;
+            self.mc_kernel_fallbacks += summary.fallbacks as u64;
             for (s, &d) in self.slots[s0..s1].iter().zip(&self.dr_buf[..nl]) {
                 match *s {
                     Slot::PairI(k) => self.pairs[k as usize].dri = d,

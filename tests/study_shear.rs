@@ -1,0 +1,101 @@
+//! `mcdem study shear` in miniature: Bagnold scaling below jamming, rate independence above it,
+//! resumability and the output files.
+
+use mcdem::study::shear::{run, Grid, Options, Protocol, RunResult};
+
+fn grid(name: &str, phi: f64, mu: f64, rates: [f64; 2], window: f64) -> Grid {
+    Grid {
+        name: name.into(),
+        phis: vec![phi],
+        mus: vec![mu],
+        nus: vec![0.5],
+        gamma_hats: rates.to_vec(),
+        n: 128,
+        protocol: Protocol {
+            compress_steps: 1000,
+            window,
+            strain_min: 4.0 * window,
+            strain_max: 6.0 * window,
+            block: 2,
+            tol: 0.15,
+            avg_windows: 2,
+            samples_per_window: 40,
+        },
+        cost_sizes: vec![],
+        ..Grid::quick()
+    }
+}
+
+fn ratio(rs: &[RunResult]) -> f64 {
+    let mut v: Vec<&RunResult> = rs.iter().collect();
+    v.sort_by(|a, b| a.spec.gamma_hat.total_cmp(&b.spec.gamma_hat));
+    v[1].p_hat / v[0].p_hat
+}
+
+#[test]
+fn bagnold_below_jamming_rate_independent_above_resumable() {
+    let dir = tempfile::tempdir().unwrap();
+    let say = |l: &str| eprintln!("{l}");
+    // Below jamming (φ = 0.5, frictional): inertial regime, p̂ ∝ γ̂², so doubling γ̂ gives × 4.
+    let below = Options {
+        grid: grid("below", 0.5, 0.5, [5e-3, 1e-2], 0.5),
+        out: dir.path().join("below"),
+        threads: 2,
+    };
+    let s = run(&below, &say).unwrap();
+    assert_eq!((s.ran, s.skipped), (2, 0));
+    let r = ratio(&s.results);
+    eprintln!("below jamming: p̂ ratio at 2× γ̂ = {r:.3} (γ̂² gives 4)");
+    assert!((r / 4.0 - 1.0).abs() < 0.3, "p̂(2γ̂)/p̂(γ̂) = {r}");
+    // Above jamming (φ = 0.75, frictionless): quasi-static, p̂ independent of γ̂ (× 3 here).
+    let above = Options {
+        grid: grid("above", 0.75, 0.0, [1e-3, 3e-3], 0.25),
+        out: dir.path().join("above"),
+        threads: 2,
+    };
+    let s = run(&above, &say).unwrap();
+    let r = ratio(&s.results);
+    eprintln!("above jamming: p̂ ratio at 3× γ̂ = {r:.3}");
+    assert!((r - 1.0).abs() < 0.3, "p̂(3γ̂)/p̂(γ̂) = {r}");
+    for x in &s.results {
+        assert!(x.z > 5.0 && x.p_hat_contact > 100.0 * x.p_hat_kinetic, "jammed: Z {} p̂ {:?}", x.z, x);
+    }
+    // A second invocation finds both runs finished and reruns nothing.
+    let again = run(&below, &say).unwrap();
+    assert_eq!((again.ran, again.skipped), (0, 2));
+    // Output files, with finite numbers in runs.csv.
+    for name in
+        ["runs.csv", "response_surface.csv", "report.md", "p_vs_rate_mu0.5_nu0.5.png", "alpha_vs_nu.png"]
+    {
+        assert!(below.out.join(name).is_file(), "{name} missing");
+    }
+    let csv = std::fs::read_to_string(below.out.join("runs.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2);
+    for col in
+        ["p_hat", "p_hat_contact", "p_hat_kinetic", "z", "shear_stress_hat", "wall_s", "particle_steps_per_s"]
+    {
+        let k = head.iter().position(|h| *h == col).unwrap();
+        for r in &rows {
+            let v: f64 = r[k].parse().unwrap();
+            assert!(v.is_finite(), "{col} = {}", r[k]);
+        }
+    }
+    let surf = std::fs::read_to_string(below.out.join("response_surface.csv")).unwrap();
+    assert!(surf.starts_with("mu,nu,phi_c,alpha,beta,alpha_paper,beta_paper"));
+}
+
+#[test]
+fn eq8_fit_recovers_synthetic_power_laws_with_shared_phi_c() {
+    use mcdem::study::fit::shared_phi_c;
+    let pc = 0.62;
+    let make = |a: f64, b: f64| -> Vec<(f64, f64)> {
+        [0.65, 0.7, 0.75, 0.8, 0.85].iter().map(|&phi| (phi, a * f64::powf(phi - pc, b))).collect()
+    };
+    let (fc, fits) = shared_phi_c(&[make(0.1, 0.5), make(0.3, 0.9)], 0.5).unwrap();
+    assert!((fc - pc).abs() < 1e-6, "{fc}");
+    assert!((fits[0].alpha - 0.1).abs() < 1e-5 && (fits[0].beta - 0.5).abs() < 1e-5, "{fits:?}");
+    assert!((fits[1].alpha - 0.3).abs() < 1e-5 && (fits[1].beta - 0.9).abs() < 1e-5, "{fits:?}");
+}
