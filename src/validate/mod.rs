@@ -237,12 +237,19 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
                 m.wall_time_s,
                 m.particle_steps_per_s.map(|v| format!("{v:.3e}")).unwrap_or_else(|| "-".into())
             );
-            series.push(plot::Series {
-                label: format!("{} {}", r.name, m.model),
-                points: vec![(m.wall_time_s.max(1e-4), (100.0 * e).max(1e-4))],
-                markers: true,
-                thin: false,
-            });
+            // One colour per engine and model family (cases and settings share it); the table
+            // above names every point.
+            let engine = if m.model.starts_with("liggghts_") { "LIGGGHTS" } else { "Rust DEM" };
+            let family = ["mc_advanced", "standard_mc", "hertz"]
+                .into_iter()
+                .find(|f| m.model.contains(f))
+                .unwrap_or(m.model.as_str());
+            let label = format!("{family} ({engine})");
+            let point = (m.wall_time_s.max(1e-4), (100.0 * e).max(1e-4));
+            match series.iter_mut().find(|s: &&mut plot::Series| s.label == label) {
+                Some(s) => s.points.push(point),
+                None => series.push(plot::Series { label, points: vec![point], markers: true, thin: false }),
+            }
         }
     }
     if series.is_empty() {
