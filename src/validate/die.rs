@@ -15,7 +15,7 @@ use serde_json::json;
 use super::runner::{self, DeckRun};
 use super::{CaseResult, ModelSummary, Options, Row, Target};
 use crate::nonlocal::scene::Scene;
-use crate::nonlocal::{Kernel, KernelKind};
+use crate::nonlocal::KernelKind;
 use crate::outputs::nrmse;
 
 /// Sphere diameter [m] and plate speed [m/s] of App. B; the decks' time step [s].
@@ -219,15 +219,9 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     let mut notes = Vec::new();
     let mut targets = Vec::new();
 
-    // References: every kernel this build has, `sphere` first (SPEC §4.1 default) when available.
-    let mut kernels = Vec::new();
-    for kind in [KernelKind::Sphere, KernelKind::Boussinesq] {
-        if Kernel::new(kind, 1.0).is_ok() {
-            kernels.push(kind);
-        }
-    }
+    // References: both kernels, `sphere` first (SPEC §4.1 default, the primary reference).
     let mut refs = Vec::new();
-    for &kind in &kernels {
+    for kind in [KernelKind::Sphere, KernelKind::Boussinesq] {
         let (c, secs) = nonlocal(&die, kind, 1.0)?;
         let name = format!("nonlocal_{}", kind.name());
         push_curve(&mut rows, die.case, &name, "kernel_scale=1", &c);
@@ -239,11 +233,6 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
             metrics: Default::default(),
         });
         refs.push((kind, c));
-    }
-    if !kernels.contains(&KernelKind::Sphere) {
-        notes.push(
-            "The `sphere` kernel is not available in this build: the reference is `boussinesq`.".to_string(),
-        );
     }
     let primary = &refs[0];
     // Consistency partners: kernel `none` is quasi-static Hertz; boussinesq × 0.82 is the fixed
