@@ -155,7 +155,12 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
     let lines = Mutex::new(());
     let say = |l: &str| {
         let _g = lines.lock();
-        bar.println(l);
+        // indicatif draws nothing when standard error is not a terminal (logs, CI): plain lines then.
+        if bar.is_hidden() {
+            eprintln!("{l}");
+        } else {
+            bar.println(l);
+        }
         bar.tick();
     };
     let t = Instant::now();
