@@ -63,32 +63,19 @@ fn quick_validation_writes_the_report_contract() {
 
 #[test]
 fn unknown_case_is_a_clear_error() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = Command::cargo_bin("mcdem")
-        .unwrap()
-        .args(["validate", "--case", "nope", "--out"])
-        .arg(dir.path())
-        .assert()
-        .code(2)
-        .get_output()
-        .stderr
-        .clone();
-    let err = String::from_utf8(out).unwrap();
+    let err = usage_error(&["validate", "--case", "nope"]);
     assert!(err.contains("unknown case 'nope'") && err.contains("hard_cases"), "{err}");
 }
 
 #[test]
 fn calibrate_rejects_a_poisson_ratio_outside_the_physical_range() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = Command::cargo_bin("mcdem")
-        .unwrap()
-        .args(["calibrate", "--nu", "0.3,0.7", "--out"])
-        .arg(dir.path())
-        .assert()
-        .code(2)
-        .get_output()
-        .stderr
-        .clone();
-    let err = String::from_utf8(out).unwrap();
+    let err = usage_error(&["calibrate", "--nu", "0.3,0.7"]);
     assert!(err.contains("Poisson ratio 0.7 outside [0, 0.5]"), "{err}");
+}
+
+/// Runs `mcdem ARGS --out TMP`, which must fail with exit code 2; returns its standard error.
+fn usage_error(args: &[&str]) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("mcdem").unwrap().args(args).arg("--out").arg(dir.path()).assert().code(2);
+    String::from_utf8(out.get_output().stderr.clone()).unwrap()
 }

@@ -17,7 +17,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::uniaxial::{self, Setup, E_HYDROGEL};
+use super::uniaxial::{self, Law, Setup, E_HYDROGEL};
 use crate::nonlocal::KernelKind;
 
 #[derive(Debug, Clone)]
@@ -76,15 +76,16 @@ fn calibrate_one(
     let (dump, data) = uniaxial::start_state(nu, s, dir)?;
     let (refc, ref_secs) = uniaxial::reference(&dump, nu, kind, s.nonlocal_steps)?;
     say(&format!("ν = {nu}: nonlocal reference ({}) in {ref_secs:.1} s", kind.name()));
-    let (hc, _) = uniaxial::compress("1", 1.0, 0.0, nu, s, &data)?;
+    let (hc, _) = uniaxial::compress(Law::HERTZ, nu, s, &data)?;
     let hertz_nrmse = uniaxial::error(&hc, &refc);
     let mut evals = 0;
     let mut eval = |gamma: f64, mpr: f64, e: f64| -> f64 {
         evals += 1;
-        let err = match uniaxial::compress_e("0", gamma, mpr, nu, e, s, &data) {
-            Ok((c, _)) => uniaxial::error(&c, &refc),
-            Err(_) => f64::INFINITY,
-        };
+        let err =
+            match uniaxial::compress(Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nu, s, &data) {
+                Ok((c, _)) => uniaxial::error(&c, &refc),
+                Err(_) => f64::INFINITY,
+            };
         say(&format!(
             "ν = {nu}: eval {evals}: γ = {gamma:.4} MPR = {mpr:.4} E = {e:.4e} Pa → NRMSE {:.3} %",
             100.0 * err

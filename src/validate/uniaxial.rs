@@ -95,35 +95,38 @@ fn compression(run: &DeckRun, s: &Setup) -> Curve {
         .collect()
 }
 
-fn deck_vars(
-    law: &str,
-    gamma: f64,
-    mpr: f64,
-    nu: f64,
-    s: &Setup,
-    strokes: u32,
-) -> Vec<(&'static str, String)> {
-    deck_vars_e(law, gamma, mpr, nu, E_HYDROGEL, s, strokes)
-}
-
 /// The hydrogel's Young's modulus [Pa] (paper Table 1).
 pub const E_HYDROGEL: f64 = 23.3e3;
 
-#[allow(clippy::too_many_arguments)]
-fn deck_vars_e(
-    law: &str,
-    gamma: f64,
-    mpr: f64,
-    nu: f64,
-    e: f64,
-    s: &Setup,
-    strokes: u32,
-) -> Vec<(&'static str, String)> {
+/// A contact law of `liggghts_inputs/hydrogel.in` with its parameters.
+#[derive(Debug, Clone, Copy)]
+pub struct Law {
+    /// The deck's `law` variable: 0 mc_advanced, 1 hertz, 2 standard MC.
+    pub law: &'static str,
+    pub gamma: f64,
+    pub mpr: f64,
+    /// The particles' Young's modulus [Pa] (the calibration's third parameter).
+    pub youngs_modulus: f64,
+}
+
+impl Law {
+    pub const HERTZ: Law = Law { law: "1", gamma: 1.0, mpr: 0.0, youngs_modulus: E_HYDROGEL };
+
+    pub fn standard(gamma: f64) -> Self {
+        Law { law: "2", gamma, mpr: 0.0, youngs_modulus: E_HYDROGEL }
+    }
+
+    pub fn advanced(gamma: f64, mpr: f64) -> Self {
+        Law { law: "0", gamma, mpr, youngs_modulus: E_HYDROGEL }
+    }
+}
+
+fn deck_vars(m: Law, nu: f64, s: &Setup, strokes: u32) -> Vec<(&'static str, String)> {
     vec![
-        ("E", e.to_string()),
-        ("law", law.to_string()),
-        ("gamma", gamma.to_string()),
-        ("mpr", mpr.to_string()),
+        ("E", m.youngs_modulus.to_string()),
+        ("law", m.law.to_string()),
+        ("gamma", m.gamma.to_string()),
+        ("mpr", m.mpr.to_string()),
         ("nu", nu.to_string()),
         ("stroke", s.stroke.to_string()),
         ("zend", Z_END.to_string()),
@@ -142,7 +145,7 @@ pub fn start_state(
 ) -> Result<(std::path::PathBuf, std::path::PathBuf), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let dump = dir.join("state.dump");
-    let mut vars = deck_vars("1", 1.0, 0.0, nu, s, 2);
+    let mut vars = deck_vars(Law::HERTZ, nu, s, 2);
     vars.push(("statestroke", "2".into()));
     vars.push(("statefile", dump.display().to_string()));
     runner::run_rust("hydrogel.in", &vars)?;
@@ -179,33 +182,12 @@ pub fn start_state(
 }
 
 /// One compression stroke of the DEM from the start state `data` (gravity on, as the deck).
-pub fn compress(
-    law: &str,
-    gamma: f64,
-    mpr: f64,
-    nu: f64,
-    s: &Setup,
-    data: &Path,
-) -> Result<(Curve, DeckRun), String> {
-    compress_e(law, gamma, mpr, nu, E_HYDROGEL, s, data)
-}
-
-/// [`compress`] with the particles' Young's modulus `e` [Pa] (the calibration's third parameter).
-#[allow(clippy::too_many_arguments)]
-pub fn compress_e(
-    law: &str,
-    gamma: f64,
-    mpr: f64,
-    nu: f64,
-    e: f64,
-    s: &Setup,
-    data: &Path,
-) -> Result<(Curve, DeckRun), String> {
-    let mut vars = deck_vars_e(law, gamma, mpr, nu, e, s, 1);
+pub fn compress(m: Law, nu: f64, s: &Setup, data: &Path) -> Result<(Curve, DeckRun), String> {
+    let mut vars = deck_vars(m, nu, s, 1);
     vars.push(("data", data.display().to_string()));
     let run = runner::run_rust("hydrogel.in", &vars)?;
     if run.table.iter().any(|r| r.iter().any(|v| !v.is_finite())) {
-        return Err(format!("law {law} gamma {gamma} mpr {mpr}: non-finite piston force"));
+        return Err(format!("law {} gamma {} mpr {}: non-finite piston force", m.law, m.gamma, m.mpr));
     }
     Ok((compression(&run, s), run))
 }
@@ -324,14 +306,14 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
                 metrics: Default::default(),
             })
         };
-        let (hc, hrun) = compress("1", 1.0, 0.0, nu, &s, &data)?;
+        let (hc, hrun) = compress(Law::HERTZ, nu, &s, &data)?;
         let he = error(&hc, &refc);
         push_curve(rows, "hertz", format!("nu={nu}"), &hc);
         summary(models, format!("hertz nu={nu}"), he, &hrun);
         // Highest stable standard-MC γ of the ladder; every stable rung is a valid run.
         let mut best: Option<(f64, Curve, DeckRun)> = None;
         for g in GAMMA_LADDER {
-            match compress("2", g, 0.0, nu, &s, &data) {
+            match compress(Law::standard(g), nu, &s, &data) {
                 Ok((c, r)) => best = Some((g, c, r)),
                 Err(e) => {
                     unstable.push(format!("ν = {nu}, standard MC γ = {g}: {e}"));
@@ -349,7 +331,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             None => (None, f64::NAN, Curve::new()),
         };
         // An unstable advanced-MC run is a finding (reported, target missed), not a failed case.
-        let (ac, ae) = match compress("0", GAMMA_ADVANCED, MPR_ADVANCED, nu, &s, &data) {
+        let (ac, ae) = match compress(Law::advanced(GAMMA_ADVANCED, MPR_ADVANCED), nu, &s, &data) {
             Ok((ac, arun)) => {
                 let ae = error(&ac, &refc);
                 push_curve(
