@@ -1198,6 +1198,9 @@ fn push_merge(out: &mut Vec<WallContact>, old: &[WallContact], k: &mut usize, mu
     out.push(c);
 }
 
+// Cold: keeps the error formatting out of the contact loops.
+#[cold]
+#[inline(never)]
 fn contact_error(step: u64, particle: i64, other: Option<i64>, e: ContactError) -> StepError {
     let with = match other {
         Some(j) => format!("contact with particle {j}"),

@@ -54,7 +54,7 @@ pub fn effective_mass(mi: f64, mj: Option<f64>) -> f64 {
 /// (negative when approaching). A non-positive overlap gives no force: with the multi-contact
 /// radius changes the effective overlap can turn non-positive while the bodies still touch
 /// geometrically, and the right answer then is "no contact", not an abort.
-#[inline]
+#[inline(always)]
 pub fn normal(c: &PairCoeffs, delta: f64, reff: f64, meff: f64, vn: f64) -> NormalForce {
     if delta <= 0.0 {
         return NormalForce::default();
@@ -96,7 +96,8 @@ pub fn hertz_overlap(e_star: f64, reff: f64, f: f64) -> f64 {
 /// projected on the tangent plane of `en`; F_t = −k_t ξ; if |F_t| > μ|F_n| it is scaled to μ|F_n|
 /// and ξ = −F_t/k_t, otherwise the damping −γ_t v_t,rel is added. Returns F_t on body i [N].
 /// With μ = 0 the result is exactly zero and ξ is reset, so callers may skip the call entirely.
-#[inline]
+// Always inlined into the pair force (see `pair::forces`): an out-of-line call costs more than its body.
+#[inline(always)]
 pub fn tangential_history(
     shear: &mut Vec3,
     vtr: &Vec3,
@@ -108,12 +109,14 @@ pub fn tangential_history(
     *shear += vtr * dt;
     let rsht = shear.dot(en);
     *shear -= en * rsht;
-    let shrmag = shear.norm();
     let kt = normal.kt;
     let mut ft = -kt * *shear;
-    let ft_shear = kt * shrmag;
     let ft_friction = friction * normal.force.abs();
-    if ft_shear > ft_friction {
+    // Compare squares: the square root is needed only when the contact slides.
+    let shrmag_sq = shear.norm_squared();
+    if kt * kt * shrmag_sq > ft_friction * ft_friction {
+        let shrmag = shrmag_sq.sqrt();
+        let ft_shear = kt * shrmag;
         if shrmag != 0.0 {
             ft *= ft_friction / ft_shear;
             *shear = -ft / kt;

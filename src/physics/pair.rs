@@ -98,7 +98,9 @@ struct Geometry {
     meff: f64,
 }
 
-#[inline]
+// Always inlined: the caller then keeps only the fields it reads, instead of copying the whole
+// ContactForce through memory (measured: ~20 % of a Hertz step when it was an out-of-line call).
+#[inline(always)]
 fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3) -> Result<ContactForce, ContactError> {
     let vn = g.vr.dot(&g.en);
     let normal = hertz::normal(c, g.overlap, g.reff, g.meff, vn);
@@ -156,7 +158,8 @@ pub fn particle_particle(
     if overlap >= rmin {
         return Err(ContactError::OverlapBeyondRadius { overlap, radius: rmin });
     }
-    let en = d / r;
+    // One division, then products: the normal LIGGGHTS computes (and cheaper than d / r).
+    let en = d * (1.0 / r);
     let cri = ri - 0.5 * overlap;
     let crj = rj - 0.5 * overlap;
     let g = Geometry {
@@ -202,7 +205,7 @@ pub fn particle_wall(
     }
     let cri = ri - 0.5 * overlap;
     let g = Geometry {
-        en: d / r,
+        en: d * (1.0 / r),
         overlap,
         point: wall.point,
         vr: bi.v - wall.velocity,
