@@ -87,19 +87,44 @@ fn die_particle_same_trajectory_on_1_and_2_ranks() {
     assert!(d <= PRINT_PRECISION, "1 vs 2 ranks: {d:e}");
 }
 
+/// Neighbour skins of the serial round-off twins: changing the skin only reorders the force sums
+/// (the first is the deck's default, also used by the multi-rank runs).
+const TWIN_SKINS: [&str; 4] = ["0.004", "0.0041", "0.0042", "0.0043"];
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
 /// The 514-particle column split in height (`processors 1 1 N`), two compression cycles of
-/// 3000-step strokes; NRMSE of the piston force over the second cycle against the serial run, next
-/// to the reference spread: two serial runs that differ only in round-off (neighbour skin 0.004 vs
-/// 0.0041 m reorders the force sums).
+/// 3000-step strokes; piston force over the second cycle. A single pair of runs is one sample of a
+/// spread, so the yardstick is the NRMSE between every pair of serial runs that differ only in the
+/// neighbour skin ([`TWIN_SKINS`]), and each multi-rank run is compared with every serial run.
+///
+/// What was measured (docs/liggghts.md): with stock `hertz` all these runs agree at print
+/// precision; with `mc_advanced` 2 and 4 ranks agree with each other to 0.03 % but differ from the
+/// serial runs by 1.7–2.0 %, and the serial skin twins differ by 0.9–1.8 % (stock `surface
+/// multicontact`: 1.6 %). The multi-contact bookkeeping LIGGGHTS provides (per-contact stores whose
+/// records live until the next neighbour-list build) makes the result depend on when lists are
+/// rebuilt; the Rust engine, which refreshes every record each step, gives identical results for
+/// both skins. So the assertion is that the ranks stay within that neighbour-list spread (median
+/// no more than a quarter above the largest twin NRMSE): a missing ghost exchange puts the cap
+/// and growth of every contact on a rank boundary wrong, far outside it.
 fn hydrogel_ranks_within_round_off_spread(ranks: &[usize]) {
     let tmp = tempfile::tempdir().unwrap();
     let base = |out: &str| -> Vec<(&str, String)> {
         vec![("stroke", "3000".into()), ("strokes", "4".into()), ("every", "50".into()), ("out", out.into())]
     };
-    mpirun(tmp.path(), 1, "hydrogel.in", &base("np1.txt"));
-    let mut skin = base("skin.txt");
-    skin.push(("skin", "0.0041".into()));
-    mpirun(tmp.path(), 1, "hydrogel.in", &skin);
+    for (k, skin) in TWIN_SKINS.iter().enumerate() {
+        let mut v = base(&format!("serial{k}.txt"));
+        v.push(("skin", skin.to_string()));
+        mpirun(tmp.path(), 1, "hydrogel.in", &v);
+    }
     for &np in ranks {
         let mut v = base(&format!("np{np}.txt"));
         v.push(("pz", np.to_string()));
@@ -109,18 +134,37 @@ fn hydrogel_ranks_within_round_off_spread(ranks: &[usize]) {
         let df = frames::rows_between(&frames::ave_time(&tmp.path().join(f)), "TimeStep", 6000.0, 12000.0);
         frames::values(&df, "f_piston_m[3]")
     };
-    let reference = second_cycle("np1.txt");
-    assert_eq!(reference.len(), 120);
-    let spread = mcdem::outputs::nrmse(&second_cycle("skin.txt"), &reference);
+    let serial: Vec<Vec<f64>> =
+        (0..TWIN_SKINS.len()).map(|k| second_cycle(&format!("serial{k}.txt"))).collect();
+    assert!(serial.iter().all(|s| s.len() == 120));
+    let mut twins = Vec::new();
+    for a in 0..serial.len() {
+        for b in a + 1..serial.len() {
+            twins.push(mcdem::outputs::nrmse(&serial[b], &serial[a]));
+        }
+    }
+    assert!(twins.iter().all(|e| e.is_finite()));
+    let twin_max = twins.iter().cloned().fold(0.0, f64::max);
+    let twin_min = twins.iter().cloned().fold(f64::INFINITY, f64::min);
+    eprintln!(
+        "hydrogel 2nd cycle piston force NRMSE between serial round-off twins ({} pairs): min {twin_min:.3e}, median {:.3e}, max {twin_max:.3e}",
+        twins.len(),
+        median(twins.clone())
+    );
     for &np in ranks {
-        let e = mcdem::outputs::nrmse(&second_cycle(&format!("np{np}.txt")), &reference);
+        let run = second_cycle(&format!("np{np}.txt"));
+        let e: Vec<f64> = serial.iter().map(|s| mcdem::outputs::nrmse(&run, s)).collect();
+        assert!(e.iter().all(|v| v.is_finite()), "1 vs {np} ranks: {e:?}");
+        let m = median(e.clone());
+        let list: Vec<String> = e.iter().map(|v| format!("{v:.3e}")).collect();
         eprintln!(
-            "hydrogel 2nd cycle piston force NRMSE: 1 vs {np} ranks {e:.3e}; round-off spread {spread:.3e}"
+            "hydrogel 2nd cycle piston force NRMSE, {np} ranks vs each serial run: {}; median {m:.3e}",
+            list.join(", ")
         );
-        // The spread of one pair of round-off twins is itself a sample (measured 1.6 % here, and
-        // 1.8 % for 2 and 4 ranks): allow a quarter more, far below what a missing ghost
-        // exchange gives (the cap and growth of every contact on a boundary would be wrong).
-        assert!(e.is_finite() && e <= 1.25 * spread, "1 vs {np} ranks: {e:e} > 1.25 x spread {spread:e}");
+        assert!(
+            m <= 1.25 * twin_max,
+            "{np} ranks: median NRMSE {m:e} vs serial runs > 1.25 x largest serial-twin NRMSE {twin_max:e}"
+        );
     }
 }
 
