@@ -356,7 +356,10 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Contacts { file } => contacts(&file),
         Command::Validate { quick, cases, out } => validate(quick, cases, out),
-        Command::Run { deck, var, log, no_progress } => run(deck, var, log, no_progress),
+        // The time loop runs on a worker of the thread pool: the pair loop's parallel halves then
+        // start on this thread while the other worker is still spinning from the previous step,
+        // instead of a blocked caller waking sleeping workers every step.
+        Command::Run { deck, var, log, no_progress } => rayon::scope(|_| run(deck, var, log, no_progress)),
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json } => bench(quick, json),
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),

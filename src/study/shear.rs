@@ -349,14 +349,9 @@ fn sample(w: &World) -> Acc {
     }
 }
 
-/// Runs one grid point single-threaded (the caller decides the thread pool).
-pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
-    let t0 = Instant::now();
-    let (mut w, l) = prepare(spec, proto.compress_steps)?;
-    let kn = k_n(spec.nu);
-    let gdot = spec.gamma_hat / time_unit(spec.nu);
-    let dt = w.dt;
-    // Lees–Edwards shear: velocity jump γ̇ L_y across the y boundary, streaming profile added.
+/// Starts Lees–Edwards shear at rate `gdot` [1/s] in a box of height `l` [m]: velocity jump γ̇ L_y
+/// across the y boundary, and the streaming profile added to every particle's velocity.
+fn start_shear(w: &mut World, gdot: f64, l: f64) {
     if let Some(dom) = w.domain.as_mut() {
         dom.le_vjump = gdot * l;
     }
@@ -365,6 +360,16 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
         let u = dom.streaming_vx(w.p.x[i].y);
         w.p.v[i].x += u;
     }
+}
+
+/// Runs one grid point single-threaded (the caller decides the thread pool).
+pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
+    let t0 = Instant::now();
+    let (mut w, l) = prepare(spec, proto.compress_steps)?;
+    let kn = k_n(spec.nu);
+    let gdot = spec.gamma_hat / time_unit(spec.nu);
+    let dt = w.dt;
+    start_shear(&mut w, gdot, l);
     let steps_per_window = (proto.window / (gdot * dt)).ceil().max(1.0) as u64;
     let every = (steps_per_window / proto.samples_per_window.max(1) as u64).max(1);
     let mut windows: Vec<Acc> = Vec::new();
@@ -779,15 +784,7 @@ fn cost_rows(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Vec<CostRow>
         };
         let row = single_thread(|| -> Result<CostRow, String> {
             let (mut w, l) = prepare(&spec, 1000)?;
-            let gdot = gamma_hat / time_unit(nu);
-            if let Some(d) = w.domain.as_mut() {
-                d.le_vjump = gdot * l;
-            }
-            let dom = w.domain.expect("domain");
-            for i in 0..w.p.len() {
-                let u = dom.streaming_vx(w.p.x[i].y);
-                w.p.v[i].x += u;
-            }
+            start_shear(&mut w, gamma_hat / time_unit(nu), l);
             for _ in 0..20 {
                 w.step().map_err(|e| e.to_string())?;
             }
