@@ -34,7 +34,7 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 
-use super::kernel::Kernel;
+use super::kernel::{BoundKernel, Kernel};
 use crate::physics::material::{Material, PairCoeffs};
 use crate::physics::Vec3;
 
@@ -45,6 +45,12 @@ const FORCE_FLOOR: f64 = 1e-9;
 
 /// Largest centre displacement per Newton iteration, in mean radii (see the step cap in `newton`).
 const MAX_MOVE: f64 = 0.05;
+
+/// FIRE stall test (see [`Nonlocal::relax`]): the time step has collapsed below this fraction of the
+/// initial one ...
+const FIRE_STALL_DT: f64 = 1e-4;
+/// ... and the residual has not reached a new low (by 1 %) for this many steps.
+const FIRE_STALL_STEPS: usize = 2000;
 
 /// One sphere of the scene (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -221,10 +227,16 @@ pub struct Nonlocal {
     walls: Vec<Wall>,
     wall_material: Material,
     kernel: Kernel,
+    /// The kernel bound to each particle's E, ν, r (scaled units).
+    bound: Vec<BoundKernel>,
     settings: Settings,
     contacts: Vec<Contact>,
     /// Iterations of the last Newton solve, successful or not.
     last_iterations: usize,
+    /// Whether the last FIRE relaxation stopped on a stall (see [`Self::relax`]), and the particle
+    /// with the largest net force at its end.
+    last_fire_stalled: bool,
+    last_fire_worst: usize,
     /// External body force per particle (scaled units), e.g. weight, times `body_factor`.
     body: Vec<Vec3>,
     body_factor: f64,
@@ -280,12 +292,16 @@ impl Nonlocal {
             walls: Vec::new(),
             wall_material,
             kernel,
+            bound: Vec::new(),
             settings,
             contacts: Vec::new(),
             last_iterations: 0,
+            last_fire_stalled: false,
+            last_fire_worst: 0,
             body: vec![Vec3::zeros(); spheres.len()],
             body_factor: 0.0,
         };
+        me.bound = (0..me.x.len()).map(|i| kernel.bind(me.e[i], me.nu[i], me.r[i])).collect();
         me.walls =
             ws.into_iter().map(|w| Wall { name: w.name, point: w.point / len, normal: w.normal }).collect();
         Ok(me)
@@ -476,7 +492,7 @@ impl Nonlocal {
                         }
                         let eb = geo[b].e * sb;
                         let mu = ea.dot(&eb);
-                        let (gk, dgk) = self.kernel.compliance(mu, self.e[s], self.nu[s], self.r[s]);
+                        let (gk, dgk) = self.bound[s].eval(mu);
                         let (pb, dpb) = pf[b];
                         res[row_c(a)] -= gk * pb;
                         push(row_c(a), row_c(b), -gk * dpb);
@@ -668,7 +684,7 @@ impl Nonlocal {
             .iter()
             .map(|&(k, sk)| {
                 let mu = dir.dot(&(geo[k].e * sk));
-                let (g, _) = self.kernel.compliance(mu, self.e[s], self.nu[s], self.r[s]);
+                let g = self.bound[s].value(mu);
                 g * Self::force_of(&self.contacts[k], self.contacts[k].delta).0
             })
             .sum()
@@ -822,7 +838,23 @@ impl Nonlocal {
             // FIRE to 1e-4, Newton on a short budget; if Newton fails (a nearly floppy particle far
             // from its equilibrium), FIRE again to 1e-7 from the prediction, Newton with the full
             // budget.
-            let (fire_steps, _) = self.relax(self.settings.fire_fallback_steps, 1e-4, true);
+            let (fire_steps, fire_rel) = self.relax(self.settings.fire_fallback_steps, 1e-4, true);
+            if self.last_fire_stalled {
+                // The second FIRE below would start from the same state and retrace the same
+                // stall, and Newton from an unrelaxed state does not converge: go straight to halving.
+                return self.restore_and_halve(
+                    load_at,
+                    (t0, t1, depth),
+                    (saved_x, saved_c, saved_w, saved_b),
+                    SolveError {
+                        message: format!(
+                            "FIRE stalled after {fire_steps} steps (the lagged nonlocal iteration oscillates)"
+                        ),
+                        residual: fire_rel,
+                        worst_particle: Some(self.ids[self.last_fire_worst]),
+                    },
+                );
+            }
             // From a relaxed state Newton converges in a few iterations or not at all.
             let full = self.settings;
             self.settings.max_newton = full.max_newton.min(12);
@@ -850,32 +882,45 @@ impl Nonlocal {
         match result {
             Ok(s) => Ok(s),
             Err(e) => {
-                self.x = saved_x;
-                self.contacts = saved_c;
-                for (w, p) in saved_w.into_iter().enumerate() {
-                    self.walls[w].point = p;
-                }
-                self.body_factor = saved_b;
-                // Nothing to halve when the increment is empty (the initial equilibrium).
-                if depth >= self.settings.max_subdivisions || t1 <= t0 {
-                    return Err(SolveError {
-                        message: format!("{} after {depth} halvings of the load increment", e.message),
-                        ..e
-                    });
-                }
-                let tm = 0.5 * (t0 + t1);
-                let a = self.advance_depth(load_at, t0, tm, depth + 1)?;
-                let b = self.advance_depth(load_at, tm, t1, depth + 1)?;
-                Ok(StepStats {
-                    newton_iterations: a.newton_iterations + b.newton_iterations,
-                    active_set_rounds: a.active_set_rounds + b.active_set_rounds,
-                    subdivisions: a.subdivisions + b.subdivisions + 1,
-                    fire_steps: a.fire_steps + b.fire_steps,
-                    residual: b.residual,
-                    relation_residual: b.relation_residual,
-                })
+                self.restore_and_halve(load_at, (t0, t1, depth), (saved_x, saved_c, saved_w, saved_b), e)
             }
         }
+    }
+
+    /// Restores the state saved before a failed increment and solves it in two halves (or reports
+    /// the failure when no halving is left).
+    #[allow(clippy::type_complexity)]
+    fn restore_and_halve(
+        &mut self,
+        load_at: &dyn Fn(f64) -> (Vec<Vec3>, f64),
+        (t0, t1, depth): (f64, f64, u32),
+        (saved_x, saved_c, saved_w, saved_b): (Vec<Vec3>, Vec<Contact>, Vec<Vec3>, f64),
+        e: SolveError,
+    ) -> Result<StepStats, SolveError> {
+        self.x = saved_x;
+        self.contacts = saved_c;
+        for (w, p) in saved_w.into_iter().enumerate() {
+            self.walls[w].point = p;
+        }
+        self.body_factor = saved_b;
+        // Nothing to halve when the increment is empty (the initial equilibrium).
+        if depth >= self.settings.max_subdivisions || t1 <= t0 {
+            return Err(SolveError {
+                message: format!("{} after {depth} halvings of the load increment", e.message),
+                ..e
+            });
+        }
+        let tm = 0.5 * (t0 + t1);
+        let a = self.advance_depth(load_at, t0, tm, depth + 1)?;
+        let b = self.advance_depth(load_at, tm, t1, depth + 1)?;
+        Ok(StepStats {
+            newton_iterations: a.newton_iterations + b.newton_iterations,
+            active_set_rounds: a.active_set_rounds + b.active_set_rounds,
+            subdivisions: a.subdivisions + b.subdivisions + 1,
+            fire_steps: a.fire_steps + b.fire_steps,
+            residual: b.residual,
+            relation_residual: b.relation_residual,
+        })
     }
 
     /// Warm-started Newton on a short budget, then (if it fails and a fallback is allowed) FIRE and
@@ -988,9 +1033,7 @@ impl Nonlocal {
             adj[s]
                 .iter()
                 .filter(|(k, _)| *k != c)
-                .map(|(k, e)| {
-                    self.kernel.compliance(dir.dot(e), self.e[s], self.nu[s], self.r[s]).0 * lag[*k]
-                })
+                .map(|(k, e)| self.bound[s].value(dir.dot(e)) * lag[*k])
                 .sum()
         };
         let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
@@ -1088,6 +1131,9 @@ impl Nonlocal {
         let mut d = vec![0.0; lag.len()];
         let mut rel;
         let mut step = 0;
+        let trace = std::env::var_os("MCDEM_NONLOCAL_TRACE").is_some();
+        let (mut best, mut best_step, mut min_dt, mut longest) = (f64::INFINITY, 0usize, dt0, 0usize);
+        self.last_fire_stalled = false;
         loop {
             if x.iter().zip(&x_list).any(|(a, b)| (a - b).norm() > 0.5 * skin) {
                 let np = candidates.len();
@@ -1115,7 +1161,31 @@ impl Nonlocal {
             // opened (all forces exactly zero, an exact equilibrium) rather than leave Newton a
             // degenerate problem (P ∝ δ^{3/2} with dP/dδ → 0).
             let unjammed = pmean < FORCE_FLOOR && fmax > 0.0;
-            if (rel <= ftol && !unjammed) || step >= max_steps {
+            if trace && step % 2000 == 0 {
+                eprintln!(
+                    "  fire {step}: force {rel:.3e} (mean P {pmean:.3e}) dt {dt:.3e} candidates {}",
+                    candidates.len()
+                );
+            }
+            if rel < 0.99 * best {
+                (best, best_step) = (rel, step);
+            }
+            min_dt = min_dt.min(dt);
+            longest = longest.max(step - best_step);
+            // Stall: the lagged nonlocal iteration oscillates (its fixed-point map is not a
+            // contraction at this load), FIRE keeps reversing, dt collapses and the residual stays
+            // put; more steps change nothing.
+            let stalled = dt < FIRE_STALL_DT * dt0 && step - best_step >= FIRE_STALL_STEPS;
+            if (rel <= ftol && !unjammed) || step >= max_steps || stalled {
+                if trace {
+                    eprintln!(
+                        "  fire done at {step}: force {rel:.3e} (tolerance {ftol:.0e}) min dt {min_dt:.3e} longest without progress {longest}{}",
+                        if stalled { " STALLED" } else { "" }
+                    );
+                }
+                self.last_fire_stalled = stalled;
+                self.last_fire_worst =
+                    (0..n).max_by(|&a, &b| f[a].norm().total_cmp(&f[b].norm())).unwrap_or(0);
                 break;
             }
             step += 1;
