@@ -31,6 +31,7 @@
 use std::fmt;
 
 use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 
@@ -237,6 +238,9 @@ pub struct Nonlocal {
     /// with the largest net force at its end.
     last_fire_stalled: bool,
     last_fire_worst: usize,
+    /// Symbolic LU of the last Jacobian and its sparsity pattern (column pointers, row indices):
+    /// reused while the pattern is unchanged (same active set, same structural non-zeros).
+    lu_pattern: Option<(Vec<usize>, Vec<usize>, SymbolicLu<usize>)>,
     /// External body force per particle (scaled units), e.g. weight, times `body_factor`.
     body: Vec<Vec3>,
     body_factor: f64,
@@ -298,6 +302,7 @@ impl Nonlocal {
             last_iterations: 0,
             last_fire_stalled: false,
             last_fire_worst: 0,
+            lu_pattern: None,
             body: vec![Vec3::zeros(); spheres.len()],
             body_factor: 0.0,
         };
@@ -483,16 +488,31 @@ impl Nonlocal {
 
         // Nonlocal terms: for particle s, the load at b moves the surface at a.
         if !self.kernel.is_zero() {
+            // G(μ) of each pair once (μ is symmetric in the pair); the derivative only with the
+            // Jacobian.
+            let mut gvals: Vec<(f64, f64)> = Vec::new();
             for (s, list) in adj.iter().enumerate() {
-                for &(a, sa) in list {
+                let z = list.len();
+                gvals.clear();
+                gvals.resize(z * z, (0.0, 0.0));
+                for p in 0..z {
+                    let ep = geo[list[p].0].e * list[p].1;
+                    for q in p + 1..z {
+                        let mu = ep.dot(&(geo[list[q].0].e * list[q].1));
+                        let v = if jac { self.bound[s].eval(mu) } else { (self.bound[s].value(mu), 0.0) };
+                        gvals[p * z + q] = v;
+                        gvals[q * z + p] = v;
+                    }
+                }
+                for (p, &(a, sa)) in list.iter().enumerate() {
                     let ea = geo[a].e * sa;
-                    for &(b, sb) in list {
+                    for (q, &(b, sb)) in list.iter().enumerate() {
                         if a == b {
                             continue;
                         }
                         let eb = geo[b].e * sb;
                         let mu = ea.dot(&eb);
-                        let (gk, dgk) = self.bound[s].eval(mu);
+                        let (gk, dgk) = gvals[p * z + q];
                         let (pb, dpb) = pf[b];
                         res[row_c(a)] -= gk * pb;
                         push(row_c(a), row_c(b), -gk * dpb);
@@ -609,7 +629,19 @@ impl Nonlocal {
             }
             let jm = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &ev.trip)
                 .map_err(|e| self.fail(format!("cannot assemble the Jacobian: {e:?}"), &ev))?;
-            let lu = jm.sp_lu().map_err(|e| self.fail(format!("sparse LU failed: {e:?}"), &ev))?;
+            let pattern = jm.symbolic();
+            let symbolic = match &self.lu_pattern {
+                Some((cp, ri, sym)) if cp == pattern.col_ptr() && ri == pattern.row_idx() => sym.clone(),
+                _ => {
+                    let sym = SymbolicLu::try_new(pattern)
+                        .map_err(|e| self.fail(format!("sparse LU (symbolic) failed: {e:?}"), &ev))?;
+                    self.lu_pattern =
+                        Some((pattern.col_ptr().to_vec(), pattern.row_idx().to_vec(), sym.clone()));
+                    sym
+                }
+            };
+            let lu = Lu::try_new_with_symbolic(symbolic, jm.as_ref())
+                .map_err(|e| self.fail(format!("sparse LU failed: {e:?}"), &ev))?;
             let mut rhs = Mat::<f64>::from_fn(dim, 1, |i, _| -ev.res[i]);
             lu.solve_in_place(rhs.as_mut());
             let mut step: Vec<f64> = (0..dim).map(|i| rhs[(i, 0)]).collect();
@@ -1110,7 +1142,9 @@ impl Nonlocal {
     /// rearrange, which is a minimisation, not a root-finding problem. With `nonlocal` the contact
     /// law is the nonlocal relation with the approach lagged by one FIRE step (the fixed-point
     /// iteration that standard multi-contact performs in the DEM, SPEC §4 (b)); without it, plain
-    /// Hertz. Stops when max |net force| ≤ `ftol` × mean contact force or after `max_steps`.
+    /// Hertz. Stops when max |net force| ≤ `ftol` × mean contact force, after `max_steps`, or on a
+    /// stall (dt below [`FIRE_STALL_DT`] × the initial dt and no new low of the residual for
+    /// [`FIRE_STALL_STEPS`] steps: the lagged iteration oscillates; recorded for the caller).
     /// Returns (steps, final relative residual). The active set is replaced by the loaded contacts
     /// of the relaxed state (with their lagged Hertz overlaps), a warm start for Newton.
     pub fn relax(&mut self, max_steps: usize, ftol: f64, nonlocal: bool) -> (usize, f64) {
