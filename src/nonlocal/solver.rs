@@ -1098,6 +1098,12 @@ impl Nonlocal {
                 }
             }
         }
+        // Per particle: lower bound of the approach at any point, lower_bound · Σ lag (≤ 0).
+        let floor: Vec<f64> = adj
+            .iter()
+            .enumerate()
+            .map(|(s, list)| self.bound[s].lower_bound() * list.iter().map(|&(k, _)| lag[k]).sum::<f64>())
+            .collect();
         let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
         let (mut sum, mut cnt) = (0.0, 0usize);
         for k in 0..total {
@@ -1108,6 +1114,19 @@ impl Nonlocal {
             let mut delta = g.gamma;
             if nonlocal {
                 let loaded = lag[k] > 0.0;
+                if !loaded {
+                    // The approach is at least lower_bound · Σ lag at each particle: when even the
+                    // largest possible bulge leaves the gap open, the contact stays unloaded (its
+                    // overlap is not used).
+                    let mut most = g.gamma - floor[i];
+                    if let Other::Particle(j) = o {
+                        most -= floor[j];
+                    }
+                    if most < 0.0 {
+                        d_out[k] = most;
+                        continue;
+                    }
+                }
                 delta -= if loaded { app_i[k] } else { approach(i, k, &g.e) };
                 if let Other::Particle(j) = o {
                     delta -= if loaded { app_j[k] } else { approach(j, k, &(-g.e)) };
