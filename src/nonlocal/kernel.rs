@@ -477,8 +477,8 @@ impl SphereTable {
             + (t3 - t2) * m1;
         let cf = sphere_closed_form_values(s);
         let mut g = rem;
-        for k in 0..4 {
-            g += self.asym[k] * cf[k];
+        for (a, c) in self.asym.iter().zip(cf) {
+            g += a * c;
         }
         g
     }
