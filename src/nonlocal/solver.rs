@@ -31,10 +31,11 @@
 use std::fmt;
 
 use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 
-use super::kernel::Kernel;
+use super::kernel::{BoundKernel, Kernel};
 use crate::physics::material::{Material, PairCoeffs};
 use crate::physics::Vec3;
 
@@ -45,6 +46,12 @@ const FORCE_FLOOR: f64 = 1e-9;
 
 /// Largest centre displacement per Newton iteration, in mean radii (see the step cap in `newton`).
 const MAX_MOVE: f64 = 0.05;
+
+/// FIRE stall test (see [`Nonlocal::relax`]): the time step has collapsed below this fraction of the
+/// initial one ...
+const FIRE_STALL_DT: f64 = 1e-4;
+/// ... and the residual has not reached a new low (by 1 %) for this many steps.
+const FIRE_STALL_STEPS: usize = 2000;
 
 /// One sphere of the scene (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -221,10 +228,19 @@ pub struct Nonlocal {
     walls: Vec<Wall>,
     wall_material: Material,
     kernel: Kernel,
+    /// The kernel bound to each particle's E, ν, r (scaled units).
+    bound: Vec<BoundKernel>,
     settings: Settings,
     contacts: Vec<Contact>,
     /// Iterations of the last Newton solve, successful or not.
     last_iterations: usize,
+    /// Whether the last FIRE relaxation stopped on a stall (see [`Self::relax`]), and the particle
+    /// with the largest net force at its end.
+    last_fire_stalled: bool,
+    last_fire_worst: usize,
+    /// Symbolic LU of the last Jacobian and its sparsity pattern (column pointers, row indices):
+    /// reused while the pattern is unchanged (same active set, same structural non-zeros).
+    lu_pattern: Option<(Vec<usize>, Vec<usize>, SymbolicLu<usize>)>,
     /// External body force per particle (scaled units), e.g. weight, times `body_factor`.
     body: Vec<Vec3>,
     body_factor: f64,
@@ -280,12 +296,17 @@ impl Nonlocal {
             walls: Vec::new(),
             wall_material,
             kernel,
+            bound: Vec::new(),
             settings,
             contacts: Vec::new(),
             last_iterations: 0,
+            last_fire_stalled: false,
+            last_fire_worst: 0,
+            lu_pattern: None,
             body: vec![Vec3::zeros(); spheres.len()],
             body_factor: 0.0,
         };
+        me.bound = (0..me.x.len()).map(|i| kernel.bind(me.e[i], me.nu[i], me.r[i])).collect();
         me.walls =
             ws.into_iter().map(|w| Wall { name: w.name, point: w.point / len, normal: w.normal }).collect();
         Ok(me)
@@ -467,16 +488,31 @@ impl Nonlocal {
 
         // Nonlocal terms: for particle s, the load at b moves the surface at a.
         if !self.kernel.is_zero() {
+            // G(μ) of each pair once (μ is symmetric in the pair); the derivative only with the
+            // Jacobian.
+            let mut gvals: Vec<(f64, f64)> = Vec::new();
             for (s, list) in adj.iter().enumerate() {
-                for &(a, sa) in list {
+                let z = list.len();
+                gvals.clear();
+                gvals.resize(z * z, (0.0, 0.0));
+                for p in 0..z {
+                    let ep = geo[list[p].0].e * list[p].1;
+                    for q in p + 1..z {
+                        let mu = ep.dot(&(geo[list[q].0].e * list[q].1));
+                        let v = if jac { self.bound[s].eval(mu) } else { (self.bound[s].value(mu), 0.0) };
+                        gvals[p * z + q] = v;
+                        gvals[q * z + p] = v;
+                    }
+                }
+                for (p, &(a, sa)) in list.iter().enumerate() {
                     let ea = geo[a].e * sa;
-                    for &(b, sb) in list {
+                    for (q, &(b, sb)) in list.iter().enumerate() {
                         if a == b {
                             continue;
                         }
                         let eb = geo[b].e * sb;
                         let mu = ea.dot(&eb);
-                        let (gk, dgk) = self.kernel.compliance(mu, self.e[s], self.nu[s], self.r[s]);
+                        let (gk, dgk) = gvals[p * z + q];
                         let (pb, dpb) = pf[b];
                         res[row_c(a)] -= gk * pb;
                         push(row_c(a), row_c(b), -gk * dpb);
@@ -593,7 +629,19 @@ impl Nonlocal {
             }
             let jm = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &ev.trip)
                 .map_err(|e| self.fail(format!("cannot assemble the Jacobian: {e:?}"), &ev))?;
-            let lu = jm.sp_lu().map_err(|e| self.fail(format!("sparse LU failed: {e:?}"), &ev))?;
+            let pattern = jm.symbolic();
+            let symbolic = match &self.lu_pattern {
+                Some((cp, ri, sym)) if cp == pattern.col_ptr() && ri == pattern.row_idx() => sym.clone(),
+                _ => {
+                    let sym = SymbolicLu::try_new(pattern)
+                        .map_err(|e| self.fail(format!("sparse LU (symbolic) failed: {e:?}"), &ev))?;
+                    self.lu_pattern =
+                        Some((pattern.col_ptr().to_vec(), pattern.row_idx().to_vec(), sym.clone()));
+                    sym
+                }
+            };
+            let lu = Lu::try_new_with_symbolic(symbolic, jm.as_ref())
+                .map_err(|e| self.fail(format!("sparse LU failed: {e:?}"), &ev))?;
             let mut rhs = Mat::<f64>::from_fn(dim, 1, |i, _| -ev.res[i]);
             lu.solve_in_place(rhs.as_mut());
             let mut step: Vec<f64> = (0..dim).map(|i| rhs[(i, 0)]).collect();
@@ -668,7 +716,7 @@ impl Nonlocal {
             .iter()
             .map(|&(k, sk)| {
                 let mu = dir.dot(&(geo[k].e * sk));
-                let (g, _) = self.kernel.compliance(mu, self.e[s], self.nu[s], self.r[s]);
+                let g = self.bound[s].value(mu);
                 g * Self::force_of(&self.contacts[k], self.contacts[k].delta).0
             })
             .sum()
@@ -822,7 +870,23 @@ impl Nonlocal {
             // FIRE to 1e-4, Newton on a short budget; if Newton fails (a nearly floppy particle far
             // from its equilibrium), FIRE again to 1e-7 from the prediction, Newton with the full
             // budget.
-            let (fire_steps, _) = self.relax(self.settings.fire_fallback_steps, 1e-4, true);
+            let (fire_steps, fire_rel) = self.relax(self.settings.fire_fallback_steps, 1e-4, true);
+            if self.last_fire_stalled {
+                // The second FIRE below would start from the same state and retrace the same
+                // stall, and Newton from an unrelaxed state does not converge: go straight to halving.
+                return self.restore_and_halve(
+                    load_at,
+                    (t0, t1, depth),
+                    (saved_x, saved_c, saved_w, saved_b),
+                    SolveError {
+                        message: format!(
+                            "FIRE stalled after {fire_steps} steps (the lagged nonlocal iteration oscillates)"
+                        ),
+                        residual: fire_rel,
+                        worst_particle: Some(self.ids[self.last_fire_worst]),
+                    },
+                );
+            }
             // From a relaxed state Newton converges in a few iterations or not at all.
             let full = self.settings;
             self.settings.max_newton = full.max_newton.min(12);
@@ -850,32 +914,45 @@ impl Nonlocal {
         match result {
             Ok(s) => Ok(s),
             Err(e) => {
-                self.x = saved_x;
-                self.contacts = saved_c;
-                for (w, p) in saved_w.into_iter().enumerate() {
-                    self.walls[w].point = p;
-                }
-                self.body_factor = saved_b;
-                // Nothing to halve when the increment is empty (the initial equilibrium).
-                if depth >= self.settings.max_subdivisions || t1 <= t0 {
-                    return Err(SolveError {
-                        message: format!("{} after {depth} halvings of the load increment", e.message),
-                        ..e
-                    });
-                }
-                let tm = 0.5 * (t0 + t1);
-                let a = self.advance_depth(load_at, t0, tm, depth + 1)?;
-                let b = self.advance_depth(load_at, tm, t1, depth + 1)?;
-                Ok(StepStats {
-                    newton_iterations: a.newton_iterations + b.newton_iterations,
-                    active_set_rounds: a.active_set_rounds + b.active_set_rounds,
-                    subdivisions: a.subdivisions + b.subdivisions + 1,
-                    fire_steps: a.fire_steps + b.fire_steps,
-                    residual: b.residual,
-                    relation_residual: b.relation_residual,
-                })
+                self.restore_and_halve(load_at, (t0, t1, depth), (saved_x, saved_c, saved_w, saved_b), e)
             }
         }
+    }
+
+    /// Restores the state saved before a failed increment and solves it in two halves (or reports
+    /// the failure when no halving is left).
+    #[allow(clippy::type_complexity)]
+    fn restore_and_halve(
+        &mut self,
+        load_at: &dyn Fn(f64) -> (Vec<Vec3>, f64),
+        (t0, t1, depth): (f64, f64, u32),
+        (saved_x, saved_c, saved_w, saved_b): (Vec<Vec3>, Vec<Contact>, Vec<Vec3>, f64),
+        e: SolveError,
+    ) -> Result<StepStats, SolveError> {
+        self.x = saved_x;
+        self.contacts = saved_c;
+        for (w, p) in saved_w.into_iter().enumerate() {
+            self.walls[w].point = p;
+        }
+        self.body_factor = saved_b;
+        // Nothing to halve when the increment is empty (the initial equilibrium).
+        if depth >= self.settings.max_subdivisions || t1 <= t0 {
+            return Err(SolveError {
+                message: format!("{} after {depth} halvings of the load increment", e.message),
+                ..e
+            });
+        }
+        let tm = 0.5 * (t0 + t1);
+        let a = self.advance_depth(load_at, t0, tm, depth + 1)?;
+        let b = self.advance_depth(load_at, tm, t1, depth + 1)?;
+        Ok(StepStats {
+            newton_iterations: a.newton_iterations + b.newton_iterations,
+            active_set_rounds: a.active_set_rounds + b.active_set_rounds,
+            subdivisions: a.subdivisions + b.subdivisions + 1,
+            fire_steps: a.fire_steps + b.fire_steps,
+            residual: b.residual,
+            relation_residual: b.relation_residual,
+        })
     }
 
     /// Warm-started Newton on a short budget, then (if it fails and a fallback is allowed) FIRE and
@@ -988,11 +1065,45 @@ impl Nonlocal {
             adj[s]
                 .iter()
                 .filter(|(k, _)| *k != c)
-                .map(|(k, e)| {
-                    self.kernel.compliance(dir.dot(e), self.e[s], self.nu[s], self.r[s]).0 * lag[*k]
-                })
+                .map(|(k, e)| self.bound[s].value(dir.dot(e)) * lag[*k])
                 .sum()
         };
+        // The approach at the loaded contacts themselves, with every pair's kernel value computed once
+        // (G depends on the pair's direction cosine only): the same values, summed in the same
+        // order, as `approach`, at half the kernel evaluations. Indexed by contact: the side of its
+        // first particle, then of the second.
+        let (mut app_i, mut app_j) = (Vec::new(), Vec::new());
+        if nonlocal {
+            app_i.resize(total, 0.0);
+            app_j.resize(total, 0.0);
+            let mut vals: Vec<f64> = Vec::new();
+            for (s, list) in adj.iter().enumerate() {
+                let z = list.len();
+                vals.clear();
+                vals.resize(z * z, 0.0);
+                for p in 0..z {
+                    for q in p + 1..z {
+                        let v = self.bound[s].value(list[p].1.dot(&list[q].1));
+                        vals[p * z + q] = v;
+                        vals[q * z + p] = v;
+                    }
+                }
+                for (p, &(k, _)) in list.iter().enumerate() {
+                    let a: f64 = (0..z).filter(|&q| q != p).map(|q| vals[p * z + q] * lag[list[q].0]).sum();
+                    if other_of(k).0 == s {
+                        app_i[k] = a;
+                    } else {
+                        app_j[k] = a;
+                    }
+                }
+            }
+        }
+        // Per particle: lower bound of the approach at any point, lower_bound · Σ lag (≤ 0).
+        let floor: Vec<f64> = adj
+            .iter()
+            .enumerate()
+            .map(|(s, list)| self.bound[s].lower_bound() * list.iter().map(|&(k, _)| lag[k]).sum::<f64>())
+            .collect();
         let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
         let (mut sum, mut cnt) = (0.0, 0usize);
         for k in 0..total {
@@ -1002,9 +1113,23 @@ impl Nonlocal {
             let (i, o) = other_of(k);
             let mut delta = g.gamma;
             if nonlocal {
-                delta -= approach(i, k, &g.e);
+                let loaded = lag[k] > 0.0;
+                if !loaded {
+                    // The approach is at least lower_bound · Σ lag at each particle: when even the
+                    // largest possible bulge leaves the gap open, the contact stays unloaded (its
+                    // overlap is not used).
+                    let mut most = g.gamma - floor[i];
+                    if let Other::Particle(j) = o {
+                        most -= floor[j];
+                    }
+                    if most < 0.0 {
+                        d_out[k] = most;
+                        continue;
+                    }
+                }
+                delta -= if loaded { app_i[k] } else { approach(i, k, &g.e) };
                 if let Other::Particle(j) = o {
-                    delta -= approach(j, k, &(-g.e));
+                    delta -= if loaded { app_j[k] } else { approach(j, k, &(-g.e)) };
                 }
             }
             d_out[k] = delta;
@@ -1036,7 +1161,9 @@ impl Nonlocal {
     /// rearrange, which is a minimisation, not a root-finding problem. With `nonlocal` the contact
     /// law is the nonlocal relation with the approach lagged by one FIRE step (the fixed-point
     /// iteration that standard multi-contact performs in the DEM, SPEC §4 (b)); without it, plain
-    /// Hertz. Stops when max |net force| ≤ `ftol` × mean contact force or after `max_steps`.
+    /// Hertz. Stops when max |net force| ≤ `ftol` × mean contact force, after `max_steps`, or on a
+    /// stall (dt below [`FIRE_STALL_DT`] × the initial dt and no new low of the residual for
+    /// [`FIRE_STALL_STEPS`] steps: the lagged iteration oscillates; recorded for the caller).
     /// Returns (steps, final relative residual). The active set is replaced by the loaded contacts
     /// of the relaxed state (with their lagged Hertz overlaps), a warm start for Newton.
     pub fn relax(&mut self, max_steps: usize, ftol: f64, nonlocal: bool) -> (usize, f64) {
@@ -1088,6 +1215,9 @@ impl Nonlocal {
         let mut d = vec![0.0; lag.len()];
         let mut rel;
         let mut step = 0;
+        let trace = std::env::var_os("MCDEM_NONLOCAL_TRACE").is_some();
+        let (mut best, mut best_step, mut min_dt, mut longest) = (f64::INFINITY, 0usize, dt0, 0usize);
+        self.last_fire_stalled = false;
         loop {
             if x.iter().zip(&x_list).any(|(a, b)| (a - b).norm() > 0.5 * skin) {
                 let np = candidates.len();
@@ -1115,7 +1245,31 @@ impl Nonlocal {
             // opened (all forces exactly zero, an exact equilibrium) rather than leave Newton a
             // degenerate problem (P ∝ δ^{3/2} with dP/dδ → 0).
             let unjammed = pmean < FORCE_FLOOR && fmax > 0.0;
-            if (rel <= ftol && !unjammed) || step >= max_steps {
+            if trace && step % 2000 == 0 {
+                eprintln!(
+                    "  fire {step}: force {rel:.3e} (mean P {pmean:.3e}) dt {dt:.3e} candidates {}",
+                    candidates.len()
+                );
+            }
+            if rel < 0.99 * best {
+                (best, best_step) = (rel, step);
+            }
+            min_dt = min_dt.min(dt);
+            longest = longest.max(step - best_step);
+            // Stall: the lagged nonlocal iteration oscillates (its fixed-point map is not a
+            // contraction at this load), FIRE keeps reversing, dt collapses and the residual stays
+            // put; more steps change nothing.
+            let stalled = dt < FIRE_STALL_DT * dt0 && step - best_step >= FIRE_STALL_STEPS;
+            if (rel <= ftol && !unjammed) || step >= max_steps || stalled {
+                if trace {
+                    eprintln!(
+                        "  fire done at {step}: force {rel:.3e} (tolerance {ftol:.0e}) min dt {min_dt:.3e} longest without progress {longest}{}",
+                        if stalled { " STALLED" } else { "" }
+                    );
+                }
+                self.last_fire_stalled = stalled;
+                self.last_fire_worst =
+                    (0..n).max_by(|&a, &b| f[a].norm().total_cmp(&f[b].norm())).unwrap_or(0);
                 break;
             }
             step += 1;
