@@ -223,7 +223,7 @@ fn validate(quick: bool, cases: Vec<String>, out: PathBuf) -> Result<(), String>
 
 fn run(deck: PathBuf, var: Vec<String>, log: Option<PathBuf>, no_progress: bool) -> Result<(), String> {
     let vars = var.chunks(2).map(|c| (c[0].clone(), c[1].clone())).collect();
-    let opts = mcdem::deck::Options { vars, log, progress: !no_progress, quiet: false };
+    let opts = mcdem::deck::Options { vars, log, progress: !no_progress, quiet: false, ..Default::default() };
     mcdem::deck::run_file(&deck, &opts).map(|_| ()).map_err(|e| format!("ERROR: {e}"))
 }
 

@@ -33,6 +33,8 @@ pub struct Options {
     /// Nothing on standard output (the log file, if any, still gets everything): for decks run
     /// in-process by `mcdem validate`.
     pub quiet: bool,
+    /// Thread use of the pair loop (default: timing probe); results do not depend on it.
+    pub pair_threads: crate::engine::PairThreads,
 }
 
 /// Runs a deck file. Errors come back as `FILE:LINE: message`.
@@ -214,6 +216,7 @@ impl Deck {
         }
         let mut world = World::new();
         world.skin = 0.0;
+        world.pair_threads = opts.pair_threads;
         Ok(Deck {
             world,
             vars,

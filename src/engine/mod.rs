@@ -353,6 +353,19 @@ pub struct World {
     parallel: bool,
     tune_ser_ns: u64,
     tune_par_ns: u64,
+    /// How the pair loop uses the thread pool (default: decided by the timing probe).
+    pub pair_threads: PairThreads,
+}
+
+/// Whether the pair loop runs on the thread pool. The results are bit-identical either way (the
+/// pair forces are summed in pair order), so this only decides speed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PairThreads {
+    /// Every `TUNE_PERIOD` steps, time a window with and without threads and keep the faster.
+    #[default]
+    Auto,
+    Serial,
+    Parallel,
 }
 
 impl World {
@@ -451,9 +464,11 @@ impl World {
         // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window with
         // and without them and keep the faster (results are bit-identical either way).
         let phase = self.step % TUNE_PERIOD;
-        let probe = phase < 2 * TUNE_WINDOW;
+        let probe = self.pair_threads == PairThreads::Auto && phase < 2 * TUNE_WINDOW;
         if probe {
             self.parallel = phase >= TUNE_WINDOW;
+        } else if self.pair_threads != PairThreads::Auto {
+            self.parallel = self.pair_threads == PairThreads::Parallel;
         }
         let t0 = probe.then(std::time::Instant::now);
         self.compute_forces(true)?;
@@ -841,8 +856,10 @@ impl World {
         };
         if self.parallel && self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
             use rayon::prelude::*;
-            self.pair_out.clear();
-            self.pair_out.resize(self.pairs.len(), None);
+            // Every entry is overwritten below: only the length has to match (no per-step fill).
+            if self.pair_out.len() != self.pairs.len() {
+                self.pair_out.resize(self.pairs.len(), None);
+            }
             self.pairs
                 .par_iter_mut()
                 .zip(self.pair_out.par_iter_mut())

@@ -69,6 +69,7 @@ pub fn run_rust(deck: &str, vars: &[(&str, String)]) -> Result<DeckRun, String> 
         log: Some(PathBuf::from("none")),
         progress: false,
         quiet: true,
+        ..Default::default()
     };
     let t = Instant::now();
     let summary = crate::deck::run_file(&decks_dir().join(deck), &opts)
