@@ -161,7 +161,7 @@ fn hydrogel_piston_force_on_4_ranks_matches_serial() {
 /// run: `mc_advanced` keeps its per-contact records in LIGGGHTS's contact history, which the
 /// restart file carries. Stock Hertz on the same deck is the yardstick: LIGGGHTS rebuilds its
 /// neighbour lists after a restart, so the force sums change order and round-off grows in the
-/// dense bed (measured from step 6000 on: forces 1.5e-6 of their range for mc_advanced, 7.5e-7
+/// dense bed (measured from step 6000 on: forces 1.1e-6 of their range for mc_advanced, 7.5e-7
 /// for Hertz).
 #[test]
 fn restart_continues_the_run_like_stock_hertz() {
