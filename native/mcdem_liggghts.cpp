@@ -40,9 +40,12 @@
 #include "fix_insert_stream.h"
 #include "contact_models.h"
 #include "fix_contact_property_atom.h"
+#include "fix_contact_history_mesh.h"
 #include "fix_contact_property_atom_wall.h"
 #include "fix_mesh_surface.h"
 #include "fix_multicontact_halfspace.h"
+#include "fix_neighlist_mesh.h"
+#include "fix_property_atom.h"
 #include "fix_property_global.h"
 #include "fix_wall_gran.h"
 #include "fix_wall_gran_base.h"
@@ -83,6 +86,20 @@ struct SettingsTableTag {
     friend type private_member(SettingsTableTag);
 };
 template struct PrivateAccess<SettingsTableTag, &Settings::settings>;
+
+// The same idiom for the per-atom row pointers of a contact store (FixContactHistory's protected
+// partner_ and contacthistory_), which the multi-contact bookkeeping has to lay out itself for
+// primitive walls (see McSource).
+struct PartnerTag {
+    typedef int **FixContactHistory::*type;
+    friend type private_member(PartnerTag);
+};
+template struct PrivateAccess<PartnerTag, &FixContactHistory::partner_>;
+struct RowsTag {
+    typedef double **FixContactHistory::*type;
+    friend type private_member(RowsTag);
+};
+template struct PrivateAccess<RowsTag, &FixContactHistory::contacthistory_>;
 
 // A keyword with two named options (`mprTest abs|signed`, `pairRadii modified|stock`).
 class ChoiceSetting : public Setting {
@@ -132,11 +149,29 @@ namespace LIGGGHTS {
 namespace ContactModels {
 
 // Everything the multi-contact bookkeeping touches, gathered once per run.
+//
+// The library's per-atom stores size their rows when the neighbour lists are built, and the wall
+// loops look a particle's radius change up in them without checking how many rows were filled
+// this step; two consequences would make the results depend on when the lists were rebuilt:
+//  - a primitive wall's store gives a particle its single row only if it was within half a skin
+//    of the wall at the last build, while the wall records every contact within the contact
+//    distance (and looks rows up by the particle's current position). A particle without a row
+//    wrote into, and read from, the row of the next particle in the store's memory (a phantom
+//    wall load on one of them);
+//  - rows filled at an earlier step stay in the store until the next build, so a wall contact
+//    that has been dropped since still finds its old radius change.
+// Hence primitive walls get one row per particle that this bookkeeping owns (`own_partner`,
+// `own_rows`), and every wall store's rows are emptied at each step before they are filled.
 struct McSource {
     HistoryData history;
     FixContactPropertyAtom *store;
     bool wall;
-    McSource(const HistoryData &h, FixContactPropertyAtom *s, bool w) : history(h), store(s), wall(w) {}
+    bool primitive;
+    FixPropertyAtom *mesh_nneighs;  // mesh walls: the number of rows of each particle in the store
+    std::vector<int> own_partner;
+    std::vector<double> own_rows;
+    McSource(const HistoryData &h, FixContactPropertyAtom *s, bool w, bool prim, FixPropertyAtom *nn)
+        : history(h), store(s), wall(w), primitive(prim), mesh_nneighs(nn) {}
 };
 
 template <>
@@ -152,17 +187,17 @@ public:
           stock_pair_radii_(false),
           ntypes_(0),
           sources_ready_(false) {
-        // Per-contact record read by the next step's radius changes (the layout LIGGGHTS's
-        // HistoryData expects): pairs r_i', r_j', |F_n|; walls the contact point relative to the
-        // centre and |F_n|.
+        // Per-contact record read by the next step's radius changes: pairs the two modified radii
+        // (see write_pair_record) and |F_n|; walls the contact point relative to the centre and
+        // |F_n| (the layout LIGGGHTS's HistoryData expects).
         if (c->is_wall()) {
             record_offset_ = hsetup->add_history_value("mcdem_point_x", "0");
             hsetup->add_history_value("mcdem_point_y", "0");
             hsetup->add_history_value("mcdem_point_z", "0");
             hsetup->add_history_value("mcdem_fn", "0");
         } else {
-            record_offset_ = hsetup->add_history_value("mcdem_radius_ij", "0");
-            hsetup->add_history_value("mcdem_radius_ji", "0");
+            record_offset_ = hsetup->add_history_value("mcdem_radius_lo", "0");
+            hsetup->add_history_value("mcdem_radius_hi", "0");
             hsetup->add_history_value("mcdem_fn", "0");
         }
         c->add_history_offset(kRecordName, record_offset_);
@@ -268,9 +303,7 @@ public:
                 for (int k = 0; k < 3; k++) rec[k] = -sidata.delta[k];
                 rec[3] = std::fabs(applied);
             } else {
-                rec[0] = radi;
-                rec[1] = radj;
-                rec[2] = std::fabs(applied);
+                write_pair_record(rec, sidata.i, sidata.j, radi, radj, std::fabs(applied));
             }
         }
     }
@@ -288,10 +321,20 @@ public:
             for (int k = 0; k < 3; k++) rec[k] = scdata.delta[k] * s;
             rec[3] = 0.0;
         } else {
-            rec[0] = stock_pair_radii_ ? scdata.radi : modified_radius_i(scdata);
-            rec[1] = scdata.radj;
-            rec[2] = 0.0;
+            write_pair_record(rec, scdata.i, scdata.j, stock_pair_radii_ ? scdata.radi : modified_radius_i(scdata),
+                              scdata.radj, 0.0);
         }
+    }
+
+    // A pair's record names its radii by atom ID (the partner with the smaller ID first), not by
+    // the order of the neighbour list: a list build that names the partners the other way round
+    // (atoms sorted or migrated) copies the history unchanged, so a record "i first" would hand
+    // each partner the other's radius, and a wrong contact point, until the pair is next evaluated.
+    void write_pair_record(double *rec, int i, int j, double radi, double radj, double fn) const {
+        const bool i_first = atom->tag[i] < atom->tag[j];
+        rec[0] = i_first ? radi : radj;
+        rec[1] = i_first ? radj : radi;
+        rec[2] = fn;
     }
 
     // i's multi-contact-modified radius at this contact. LIGGGHTS's pair loop grows radj and the
@@ -400,7 +443,7 @@ private:
         FixContactPropertyAtom *pair_store =
             static_cast<FixContactPropertyAtom *>(modify->find_fix_id("multicontactData_"));
         if (!pair_store) error->all(FLERR, "model mc_advanced: the pair style's per-contact store was not created");
-        sources_.push_back(McSource(HistoryData('p', (void *)pg, record_offset_), pair_store, false));
+        sources_.push_back(McSource(HistoryData('p', (void *)pg, record_offset_), pair_store, false, false, NULL));
 
         const int nwalls = modify->n_fixes_style("wall/gran");
         for (int w = 0; w < nwalls; w++) {
@@ -418,12 +461,14 @@ private:
                     std::snprintf(fixid, sizeof(fixid), "tracker_%s", mesh->id);
                     Fix *tracker = modify->find_fix_id(fixid);
                     FixContactPropertyAtom *store = mesh->meshMulticontactData();
-                    if (!tracker || !store) {
-                        std::snprintf(fixid, sizeof(fixid), "fix %s: mesh %s has no contact tracker or store",
-                                      fwg->id, mesh->id);
+                    FixPropertyAtom *nneighs = mesh->meshNeighlist() ? mesh->meshNeighlist()->fix_nneighs() : NULL;
+                    if (!tracker || !store || !nneighs) {
+                        std::snprintf(fixid, sizeof(fixid),
+                                      "fix %s: mesh %s has no contact tracker, store or neighbour list", fwg->id,
+                                      mesh->id);
                         error->all(FLERR, fixid);
                     }
-                    sources_.push_back(McSource(HistoryData('m', (void *)tracker, 0), store, true));
+                    sources_.push_back(McSource(HistoryData('m', (void *)tracker, 0), store, true, false, nneighs));
                 }
             } else {
                 std::snprintf(fixid, sizeof(fixid), "history_%s", fwg->id);
@@ -435,7 +480,7 @@ private:
                                   fwg->id);
                     error->all(FLERR, fixid);
                 }
-                sources_.push_back(McSource(HistoryData('w', (void *)hist, 0), store, true));
+                sources_.push_back(McSource(HistoryData('w', (void *)hist, 0), store, true, true, NULL));
             }
         }
         sources_ready_ = true;
@@ -444,8 +489,12 @@ private:
     void update_radius_changes() {
         if (!sources_ready_) collect_sources();
         for (size_t s = 0; s < sources_.size(); s++) {
-            if (sources_[s].wall) static_cast<FixContactPropertyAtomWall *>(sources_[s].store)->clear();
-            else sources_[s].store->clear();
+            if (sources_[s].wall) {
+                static_cast<FixContactPropertyAtomWall *>(sources_[s].store)->clear();
+                empty_wall_rows(sources_[s]);
+            } else {
+                sources_[s].store->clear();
+            }
         }
         const int nlocal = atom->nlocal;
         double **x = atom->x;
@@ -461,14 +510,32 @@ private:
             for (size_t s = 0; s < sources_.size(); s++) {
                 HistoryData &h = sources_[s].history;
                 const int n = h.get_npartners(i);
+                const NeighList *list = sources_[s].wall ? NULL : static_cast<PairGranProxy *>(h.get_ptr())->list;
                 for (int jj = 0; jj < n; jj++) {
                     double *rec = h.get_data_ptr(i, jj);
                     // A neighbour never close enough to be recorded has no contact surface.
                     if (rec[0] == 0.0 && rec[1] == 0.0 && (sources_[s].wall ? rec[2] == 0.0 : true)) continue;
                     double pij[4], pji[4];
-                    h.compute_surfPos(i, jj, x, rec, pij, pji, f_eps);
+                    if (list) {
+                        // The library's layout: this list entry's r_i', r_j', |F_n|.
+                        const int j = list->firstneigh[i][jj] & NEIGHMASK;
+                        const bool i_first = tag[i] < tag[j];
+                        const double oriented[3] = {i_first ? rec[0] : rec[1], i_first ? rec[1] : rec[0], rec[2]};
+                        h.compute_surfPos(i, jj, x, oriented, pij, pji, f_eps);
+                    } else {
+                        h.compute_surfPos(i, jj, x, rec, pij, pji, f_eps);
+                    }
                     pij[3] = pji[3] = h.get_fn(rec);
-                    h.save_contact_property_atom(i, jj, tag, pij, pji, sources_[s].store);
+                    if (h.get_type() == 'm') {
+                        // The library's HistoryData names the row by the triangle in the tracker's
+                        // jj-th slot, while the record it read is that of the jj-th contact (slots
+                        // freed by ended contacts are skipped): the slot's own triangle is used here.
+                        FixContactHistoryMesh *tracker = static_cast<FixContactHistoryMesh *>(h.get_ptr());
+                        const int id_tri = tracker->get_partner_idTri(i, tracker->get_contact(i, jj));
+                        sources_[s].store->add_partner(i, id_tri, pij);
+                    } else {
+                        h.save_contact_property_atom(i, jj, tag, pij, pji, sources_[s].store);
+                    }
                 }
             }
         }
@@ -508,6 +575,31 @@ private:
         // 3. Ghost copies see their owners' radius changes (with several MPI ranks a pair across a
         //    sub-domain boundary reads its partner's row from the ghost).
         for (size_t s = 0; s < sources_.size(); s++) sources_[s].store->do_forward_comm();
+    }
+
+    // Empties a wall store's rows for this step (see McSource). Mesh walls keep the library's rows:
+    // their number per particle, the triangles near it, is what the wall loop searches. A primitive
+    // wall's rows are pointed at one row per particle (owned and ghost) owned here; the library
+    // points them back at its own storage at the next neighbour-list build, before they are used.
+    void empty_wall_rows(McSource &src) {
+        FixContactPropertyAtom *st = src.store;
+        int **partner = st->*private_member(PartnerTag());
+        double **rows = st->*private_member(RowsTag());
+        const int nall = atom->nlocal + atom->nghost;
+        if (src.primitive) {
+            const size_t dnum = st->get_dnum();
+            src.own_partner.assign(nall, -1);
+            src.own_rows.assign(nall * dnum, 0.0);
+            for (int i = 0; i < nall; i++) {
+                partner[i] = &src.own_partner[i];
+                rows[i] = &src.own_rows[i * dnum];
+            }
+        } else {
+            for (int i = 0; i < nall; i++) {
+                const int n = src.mesh_nneighs->get_vector_atom_int(i);
+                for (int k = 0; k < n; k++) partner[i][k] = -1;
+            }
+        }
     }
 
     ContactModelBase *cmb_;

@@ -5,7 +5,8 @@
 //! - MPR = 0 reproduces the stock `hertz` (pairs, primitive and mesh walls) to print precision;
 //! - MPR huge reproduces the stock `surface multicontact` + `fix multicontact/halfspace` (same γ);
 //! - bad decks stop with one `ERROR:` line that names the cause;
-//! - the hydrogel packing: piston force of mc_advanced (cap never tripping) vs stock multicontact.
+//! - the hydrogel packing: piston force of mc_advanced (cap never tripping) vs stock multicontact,
+//!   and its independence of the neighbour skin.
 //!
 //! (The `library.h` bindings are tested in `liggghts_library.rs`, a process of their own.)
 //!
@@ -100,15 +101,23 @@ fn mpr_zero_is_stock_hertz_with_primitive_and_mesh_walls() {
 fn huge_mpr_is_stock_multicontact_same_gamma() {
     // Stock multicontact registers a contact distance factor of 2; use it for both. With
     // `pairRadii stock` mc_advanced uses LIGGGHTS's pair convention (the first partner's original
-    // radius in R_eff, lever arm and contact point) and is the stock model to round-off. With the
+    // radius in R_eff, lever arm and contact point) and is the stock model to round-off, except
+    // where the stock bookkeeping depends on the neighbour-list history and mc_advanced does not
+    // (docs/liggghts.md, "Neighbour lists"): in bcc_box the atoms are sorted at step 1000, the
+    // next list build names some pairs the other way round, and stock then hands each partner the
+    // other's radius for one step. That step is the whole difference (measured 1.6e-5 of the force
+    // range; with atom sorting switched off in the deck, 5e-11), hence 1e-4 for bcc_box. With the
     // default `pairRadii modified` (SPEC §2: both partners' modified radii, so a pair does not
     // depend on the neighbour-list order) pairs differ at second order; walls are unaffected.
-    for (deck, tol) in [("single_particle_plates.in", 1e-6), ("two_particles.in", 0.03), ("bcc_box.in", 0.03)]
-    {
+    for (deck, tol_stock, tol) in [
+        ("single_particle_plates.in", 1e-6, 1e-6),
+        ("two_particles.in", 1e-6, 0.03),
+        ("bcc_box.in", 1e-4, 0.03),
+    ] {
         let stock = [("law", "2"), ("cdf", "2.0")];
         let d = compare_laws(deck, &[("mpr", "1e9"), ("cdf", "2.0"), ("pairradii", "stock")], &stock);
         eprintln!("{deck}: mc_advanced MPR = 1e9, pairRadii stock vs stock multicontact: {d:e}");
-        assert!(d <= 1e-6, "{deck}: pairRadii stock, max relative difference {d:e}");
+        assert!(d <= tol_stock, "{deck}: pairRadii stock, max relative difference {d:e}");
         let d = compare_laws(deck, &[("mpr", "1e9"), ("cdf", "2.0")], &stock);
         eprintln!("{deck}: mc_advanced MPR = 1e9, pairRadii modified vs stock multicontact: {d:e}");
         assert!(d <= tol, "{deck}: pairRadii modified, max relative difference {d:e}");
@@ -294,4 +303,31 @@ fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
         "hydrogel, one fast stroke: piston F_z NRMSE mc_advanced (MPR 1e9) vs stock multicontact = {e:.3e}"
     );
     assert!(e <= 0.02, "NRMSE {e}");
+}
+
+#[test]
+fn hydrogel_piston_force_does_not_depend_on_the_neighbour_skin() {
+    // Changing the skin changes only when the neighbour lists are rebuilt (and the order of the
+    // force sums). Shortened: one compression cycle of 3000-step strokes. Three pieces of
+    // LIGGGHTS's multi-contact bookkeeping made the result depend on the list history
+    // (docs/liggghts.md, "Neighbour lists"); with the other two handled, each of them alone gave
+    // these NRMSEs between skins 0.004 and 0.0041 on this run: pair records in list order 6.7e-5,
+    // mesh rows filed under the wrong triangle 3.6e-3, primitive-wall rows shared between
+    // particles 1.2e-3. Now the runs agree at the print precision of `fix ave/time` (6 digits).
+    let tmp = TempDir::new().unwrap();
+    let skins = ["0.004", "0.0041", "0.006"];
+    for (k, skin) in skins.iter().enumerate() {
+        let out = format!("skin{k}.txt");
+        let vars = [("stroke", "3000"), ("strokes", "2"), ("every", "50"), ("skin", skin), ("out", &out)];
+        run_ok(tmp.path(), "hydrogel.in", &vars);
+    }
+    let fz =
+        |k: usize| read_ave_time(&tmp.path().join(format!("skin{k}.txt"))).iter().map(|r| r[3]).collect();
+    let reference: Vec<f64> = fz(0);
+    assert_eq!(reference.len(), 120);
+    for (k, skin) in skins.iter().enumerate().skip(1) {
+        let e = nrmse(&fz(k), &reference);
+        eprintln!("hydrogel, one cycle: piston F_z NRMSE skin {skin} vs {} = {e:.3e}", skins[0]);
+        assert!(e <= 1e-5, "skin {skin} vs {}: NRMSE {e:e}", skins[0]);
+    }
 }
