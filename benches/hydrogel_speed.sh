@@ -3,7 +3,7 @@
 # 4 strokes × 30000 steps), VTK dumps off in both, run back to back in one invocation so both see
 # the same machine load. Prints particle-steps per second from each engine's "Loop time" lines,
 # mcdem with one and with two threads (the deck is too small for LIGGGHTS to gain from a second
-# MPI rank: 24.8 s on 2 ranks against 22.5 s on 1).
+# MPI rank: 16.9 s on 2 ranks against 15.7 s on 1, benches/hydrogel_mpi.sh).
 # Usage: benches/hydrogel_speed.sh [path/to/mcdem]
 set -euo pipefail
 MCDEM=${1:-$(dirname "$0")/../target/release/mcdem}
