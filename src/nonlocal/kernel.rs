@@ -434,23 +434,38 @@ impl SphereTable {
         Self { asym, d1, val: val.into_boxed_slice(), der: der.into_boxed_slice() }
     }
 
-    /// g and dg/ds at s ∈ (0, 1].
+    /// The table cell holding s: local coordinate t ∈ [0, 1), the end values and the end slopes
+    /// scaled to the cell.
     #[inline]
-    fn eval(&self, s: f64) -> (f64, f64) {
+    fn cell(&self, s: f64) -> (f64, [f64; 4]) {
         let m = SPHERE_GRID as f64;
         let u = s * m;
         let j = (u as usize).min(SPHERE_GRID - 1);
         let t = u - j as f64;
         let h = 1.0 / m;
-        let (v0, v1, m0, m1) = (self.val[j], self.val[j + 1], self.der[j] * h, self.der[j + 1] * h);
+        (t, [self.val[j], self.val[j + 1], self.der[j] * h, self.der[j + 1] * h])
+    }
+
+    /// Cubic Hermite interpolant of the series remainder on a cell.
+    #[inline]
+    fn hermite(t: f64, [v0, v1, m0, m1]: [f64; 4]) -> f64 {
         let (t2, t3) = (t * t, t * t * t);
-        let rem = (2.0 * t3 - 3.0 * t2 + 1.0) * v0
+        (2.0 * t3 - 3.0 * t2 + 1.0) * v0
             + (t3 - 2.0 * t2 + t) * m0
             + (-2.0 * t3 + 3.0 * t2) * v1
-            + (t3 - t2) * m1;
+            + (t3 - t2) * m1
+    }
+
+    /// g and dg/ds at s ∈ (0, 1].
+    #[inline]
+    fn eval(&self, s: f64) -> (f64, f64) {
+        let (t, c) = self.cell(s);
+        let [v0, v1, m0, m1] = c;
+        let t2 = t * t;
+        let rem = Self::hermite(t, c);
         let drem =
             ((6.0 * t2 - 6.0 * t) * (v0 - v1) + (3.0 * t2 - 4.0 * t + 1.0) * m0 + (3.0 * t2 - 2.0 * t) * m1)
-                * m;
+                * SPHERE_GRID as f64;
         let (cf, dcf) = sphere_closed_forms(s);
         let mut g = rem;
         let mut dg = drem;
@@ -464,21 +479,10 @@ impl SphereTable {
     /// g alone at s ∈ (0, 1] (the same value as `eval(s).0`).
     #[inline]
     fn value(&self, s: f64) -> f64 {
-        let m = SPHERE_GRID as f64;
-        let u = s * m;
-        let j = (u as usize).min(SPHERE_GRID - 1);
-        let t = u - j as f64;
-        let h = 1.0 / m;
-        let (v0, v1, m0, m1) = (self.val[j], self.val[j + 1], self.der[j] * h, self.der[j + 1] * h);
-        let (t2, t3) = (t * t, t * t * t);
-        let rem = (2.0 * t3 - 3.0 * t2 + 1.0) * v0
-            + (t3 - 2.0 * t2 + t) * m0
-            + (-2.0 * t3 + 3.0 * t2) * v1
-            + (t3 - t2) * m1;
-        let cf = sphere_closed_form_values(s);
-        let mut g = rem;
-        for (a, c) in self.asym.iter().zip(cf) {
-            g += a * c;
+        let (t, c) = self.cell(s);
+        let mut g = Self::hermite(t, c);
+        for (a, cf) in self.asym.iter().zip(sphere_closed_form_values(s)) {
+            g += a * cf;
         }
         g
     }
