@@ -138,12 +138,15 @@ enum Study {
         /// Skip the cost-vs-N measurement
         #[arg(long)]
         no_cost: bool,
+        /// Only the cost-vs-N measurement (no grid run is started; finished runs are still reported)
+        #[arg(long, conflicts_with = "no_cost")]
+        cost_only: bool,
     },
 }
 
 fn study(s: Study) -> Result<(), String> {
     match s {
-        Study::Shear { grid, out, n, gamma, mpr, threads, no_cost } => {
+        Study::Shear { grid, out, n, gamma, mpr, threads, no_cost, cost_only } => {
             use mcdem::study::shear;
             let mut g = if grid == "full" { shear::Grid::full() } else { shear::Grid::quick() };
             if let Some(n) = n {
@@ -159,7 +162,7 @@ fn study(s: Study) -> Result<(), String> {
                 g.cost_sizes.clear();
             }
             let out = out.unwrap_or_else(|| PathBuf::from(format!("validation/shear_{grid}")));
-            let opts = shear::Options { grid: g, out: out.clone(), threads };
+            let opts = shear::Options { grid: g, out: out.clone(), threads, cost_only };
             let sum = shear::run(&opts, &|l| eprintln!("{l}"))?;
             for (mu, (pc, lo)) in &sum.phi_c {
                 println!("mu {mu}: phi_c {pc:.4} (searched from {lo})");

@@ -41,6 +41,7 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
         grid: grid("below", 0.5, 0.5, [5e-3, 1e-2], 0.5),
         out: dir.path().join("below"),
         threads: 2,
+        cost_only: false,
     };
     let s = run(&below, &say).unwrap();
     assert_eq!((s.ran, s.skipped), (2, 0));
@@ -52,6 +53,7 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
         grid: grid("above", 0.75, 0.0, [1e-3, 3e-3], 0.25),
         out: dir.path().join("above"),
         threads: 2,
+        cost_only: false,
     };
     let s = run(&above, &say).unwrap();
     let r = ratio(&s.results);
@@ -63,6 +65,12 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
     // A second invocation finds both runs finished and reruns nothing.
     let again = run(&below, &say).unwrap();
     assert_eq!((again.ran, again.skipped), (0, 2));
+    // `--cost-only` on a bigger grid starts no run and still reports the finished ones.
+    let mut bigger = below.clone();
+    bigger.cost_only = true;
+    bigger.grid.gamma_hats.push(2e-2);
+    let c = run(&bigger, &say).unwrap();
+    assert_eq!((c.ran, c.skipped, c.results.len()), (0, 2, 2));
     // Output files, with finite numbers in runs.csv.
     for name in
         ["runs.csv", "response_surface.csv", "report.md", "p_vs_rate_mu0.5_nu0.5.png", "alpha_vs_nu.png"]

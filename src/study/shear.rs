@@ -515,7 +515,7 @@ impl Grid {
             mpr: MPR,
             restitution: RESTITUTION,
             protocol: Protocol::full(),
-            cost_sizes: vec![500, 2000, 8000],
+            cost_sizes: vec![500, 2000, 8000, 20000],
             cost_steps: 500,
         }
     }
@@ -552,6 +552,8 @@ pub struct Options {
     pub out: PathBuf,
     /// Runs side by side (each single-threaded).
     pub threads: usize,
+    /// Measure cost vs N only: no grid run is started (finished ones are still reported).
+    pub cost_only: bool,
 }
 
 /// What a study call did.
@@ -657,6 +659,9 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
             Some(r) if r.spec == s && &r.protocol == proto => done.push(r),
             _ => todo.push(s),
         }
+    }
+    if opts.cost_only {
+        todo.clear();
     }
     let skipped = done.len() + failed.len();
     let total = todo.len();
