@@ -10,22 +10,6 @@ const E: f64 = 23.3e3;
 const NU: f64 = 0.5;
 const EW: f64 = 50e6;
 
-fn box_walls(lx: f64, ly: f64, lz: f64) -> Vec<Wall> {
-    let w = |name: &str, p: [f64; 3], n: [f64; 3]| Wall {
-        name: name.into(),
-        point: Vec3::from(p),
-        normal: Vec3::from(n),
-    };
-    vec![
-        w("xlo", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
-        w("xhi", [lx, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-        w("ylo", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
-        w("yhi", [0.0, ly, 0.0], [0.0, -1.0, 0.0]),
-        w("bottom", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-        w("top", [0.0, 0.0, lz], [0.0, 0.0, -1.0]),
-    ]
-}
-
 fn solver(spheres: &[Sphere], walls: &[Wall], kind: KernelKind) -> Nonlocal {
     let wm = Material::hertz(EW, NU).unwrap();
     Nonlocal::new(spheres, walls, wm, Kernel::new(kind, 1.0).unwrap(), Settings::default()).unwrap()
@@ -58,7 +42,7 @@ fn kernel_none_is_hertz_for_a_sphere_between_plates() {
     let r = 1e-3;
     let m = Material::hertz(E, NU).unwrap();
     let sphere = Sphere { id: 1, x: Vec3::new(r, r, r), radius: r, material: m };
-    let walls = box_walls(2.0 * r, 2.0 * r, 2.0 * r);
+    let walls = Wall::rigid_box(2.0 * r, 2.0 * r, 2.0 * r, "top");
     // Only the two plates: drop the side walls.
     let plates = vec![walls[4].clone(), walls[5].clone()];
     let wm = Material::hertz(EW, NU).unwrap();
@@ -125,7 +109,7 @@ fn die_table_boussinesq() {
     ];
     let r = 1e-3;
     let m = Material::hertz(E, NU).unwrap();
-    let walls = box_walls(2.0 * r, 2.0 * r, 2.0 * r);
+    let walls = Wall::rigid_box(2.0 * r, 2.0 * r, 2.0 * r, "top");
     let mut s = solver(
         &[Sphere { id: 1, x: Vec3::new(r, r, r), radius: r, material: m }],
         &walls,
@@ -171,7 +155,7 @@ fn bcc_cell_has_lattice_symmetry() {
         });
     }
     spheres.push(Sphere { id: 9, x: Vec3::new(a / 2.0, a / 2.0, a / 2.0), radius: r, material: m });
-    let walls = box_walls(a, a, a);
+    let walls = Wall::rigid_box(a, a, a, "top");
     for kind in [KernelKind::None, KernelKind::Boussinesq] {
         let mut s = solver(&spheres, &walls, kind);
         let forces = compress(&mut s, walls[5].point, 0.3 * r, 6);

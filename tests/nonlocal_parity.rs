@@ -71,19 +71,7 @@ fn nonlocal_at(delta: f64) -> (f64, f64) {
         });
     }
     spheres.push(Sphere { id: 9, x: Vec3::repeat(a / 2.0), radius: R, material: m });
-    let w = |name: &str, p: [f64; 3], n: [f64; 3]| Wall {
-        name: name.into(),
-        point: Vec3::from(p),
-        normal: Vec3::from(n),
-    };
-    let walls = vec![
-        w("xlo", [0.0; 3], [1.0, 0.0, 0.0]),
-        w("xhi", [a, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-        w("ylo", [0.0; 3], [0.0, 1.0, 0.0]),
-        w("yhi", [0.0, a, 0.0], [0.0, -1.0, 0.0]),
-        w("bottom", [0.0; 3], [0.0, 0.0, 1.0]),
-        w("top", [0.0, 0.0, a], [0.0, 0.0, -1.0]),
-    ];
+    let walls = Wall::rigid_box(a, a, a, "top");
     let kernel = Kernel::new(KernelKind::Boussinesq, GAMMA).unwrap();
     let mut s =
         Nonlocal::new(&spheres, &walls, Material::hertz(50e6, 0.5).unwrap(), kernel, Settings::default())
@@ -207,19 +195,7 @@ fn random_packing_rest_state_is_a_nonlocal_equilibrium() {
         .enumerate()
         .map(|(k, (x, r))| Sphere { id: k as u64 + 1, x: *x, radius: *r, material: m })
         .collect();
-    let w = |name: &str, p: [f64; 3], n: [f64; 3]| Wall {
-        name: name.into(),
-        point: Vec3::from(p),
-        normal: Vec3::from(n),
-    };
-    let walls = vec![
-        w("xlo", [0.0; 3], [1.0, 0.0, 0.0]),
-        w("xhi", [l, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-        w("ylo", [0.0; 3], [0.0, 1.0, 0.0]),
-        w("yhi", [0.0, l, 0.0], [0.0, -1.0, 0.0]),
-        w("bottom", [0.0; 3], [0.0, 0.0, 1.0]),
-        w("top", [0.0, 0.0, top], [0.0, 0.0, -1.0]),
-    ];
+    let walls = Wall::rigid_box(l, l, top, "top");
     let kernel = Kernel::new(KernelKind::Boussinesq, GAMMA).unwrap();
     let mut s =
         Nonlocal::new(&spheres, &walls, Material::hertz(50e6, 0.5).unwrap(), kernel, Settings::default())

@@ -76,6 +76,26 @@ pub struct Wall {
     pub normal: Vec3,
 }
 
+impl Wall {
+    /// The six walls of the box [0, lx] × [0, ly] × [0, lz], normals into the box, in the order
+    /// xlo, xhi, ylo, yhi, bottom, top; `top` names the last one (a die's "top", a "piston").
+    pub fn rigid_box(lx: f64, ly: f64, lz: f64, top: &str) -> Vec<Wall> {
+        let w = |name: &str, p: [f64; 3], n: [f64; 3]| Wall {
+            name: name.into(),
+            point: Vec3::from(p),
+            normal: Vec3::from(n),
+        };
+        vec![
+            w("xlo", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            w("xhi", [lx, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+            w("ylo", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+            w("yhi", [0.0, ly, 0.0], [0.0, -1.0, 0.0]),
+            w("bottom", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            w(top, [0.0, 0.0, lz], [0.0, 0.0, -1.0]),
+        ]
+    }
+}
+
 /// Solver controls.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
@@ -1468,19 +1488,7 @@ mod tests {
         let m = Material::hertz(e, nu).unwrap();
         let wm = Material::hertz(50e6, 0.5).unwrap();
         let l = 2.0 * r;
-        let w = |name: &str, p: [f64; 3], n: [f64; 3]| Wall {
-            name: name.into(),
-            point: Vec3::from(p),
-            normal: Vec3::from(n),
-        };
-        let walls = vec![
-            w("xlo", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
-            w("xhi", [l, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-            w("ylo", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
-            w("yhi", [0.0, l, 0.0], [0.0, -1.0, 0.0]),
-            w("bottom", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-            w("top", [0.0, 0.0, l], [0.0, 0.0, -1.0]),
-        ];
+        let walls = Wall::rigid_box(l, l, l, "top");
         let sphere = Sphere { id: 1, x: Vec3::new(r, r, r), radius: r, material: m };
         let mut s =
             Nonlocal::new(&[sphere], &walls, wm, Kernel::new(kind, 1.0).unwrap(), Settings::default())

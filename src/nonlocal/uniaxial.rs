@@ -116,7 +116,7 @@ pub fn compress_with(
         return Err(bad("uniaxial: steps >= 1 and positive box dimensions are required".into()));
     }
     let spheres: Vec<Sphere> = start.iter().map(|s| Sphere { material: u.particle, ..*s }).collect();
-    let walls = box_walls(u.lx, u.ly, u.z_start);
+    let walls = Wall::rigid_box(u.lx, u.ly, u.z_start, "piston");
     let settings = Settings { affine_predictor: true, fire_first: true, ..Settings::default() };
     let mut solver = Nonlocal::new(&spheres, &walls, u.wall, kernel, settings).map_err(bad)?;
     let points0: Vec<Vec3> = walls.iter().map(|w| w.point).collect();
@@ -173,23 +173,6 @@ pub fn compress_with(
 /// [`compress_with`] without progress reports.
 pub fn compress(start: &[Sphere], u: &Uniaxial, kernel: Kernel) -> Result<Vec<UniaxialPoint>, SolveError> {
     compress_with(start, u, kernel, &mut |_| {})
-}
-
-/// Walls in the order xlo, xhi, ylo, yhi, bottom, piston (normals into the box).
-pub fn box_walls(lx: f64, ly: f64, z: f64) -> Vec<Wall> {
-    let w = |name: &str, p: [f64; 3], n: [f64; 3]| Wall {
-        name: name.into(),
-        point: Vec3::from(p),
-        normal: Vec3::from(n),
-    };
-    vec![
-        w("xlo", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
-        w("xhi", [lx, 0.0, 0.0], [-1.0, 0.0, 0.0]),
-        w("ylo", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
-        w("yhi", [0.0, ly, 0.0], [0.0, -1.0, 0.0]),
-        w("bottom", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
-        w("piston", [0.0, 0.0, z], [0.0, 0.0, -1.0]),
-    ]
 }
 
 /// σ at the given piston heights, linearly interpolated between load steps (for the φ table of
