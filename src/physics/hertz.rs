@@ -112,17 +112,13 @@ pub fn tangential_history(
     let kt = normal.kt;
     let mut ft = -kt * *shear;
     let ft_friction = friction * normal.force.abs();
-    // Compare squares: the square root is needed only when the contact slides.
+    // Compare squares: the square root is needed only when the contact slides. Sliding implies
+    // |ξ| > 0 (the limit μ|F_n| is ≥ 0), so the division below is safe.
     let shrmag_sq = shear.norm_squared();
     if kt * kt * shrmag_sq > ft_friction * ft_friction {
-        let shrmag = shrmag_sq.sqrt();
-        let ft_shear = kt * shrmag;
-        if shrmag != 0.0 {
-            ft *= ft_friction / ft_shear;
-            *shear = -ft / kt;
-        } else {
-            ft = Vec3::zeros();
-        }
+        let ft_shear = kt * shrmag_sq.sqrt();
+        ft *= ft_friction / ft_shear;
+        *shear = -ft / kt;
     } else {
         ft -= normal.gamma_t * vtr;
     }
