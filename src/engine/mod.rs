@@ -464,11 +464,15 @@ impl World {
         // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window with
         // and without them and keep the faster (results are bit-identical either way).
         let phase = self.step % TUNE_PERIOD;
-        let probe = self.pair_threads == PairThreads::Auto && phase < 2 * TUNE_WINDOW;
+        let probe = match self.pair_threads {
+            PairThreads::Auto => phase < 2 * TUNE_WINDOW,
+            fixed => {
+                self.parallel = fixed == PairThreads::Parallel;
+                false
+            }
+        };
         if probe {
             self.parallel = phase >= TUNE_WINDOW;
-        } else if self.pair_threads != PairThreads::Auto {
-            self.parallel = self.pair_threads == PairThreads::Parallel;
         }
         let t0 = probe.then(std::time::Instant::now);
         self.compute_forces(true)?;
