@@ -197,6 +197,9 @@ struct Pair {
     force: Vec3,
     /// Torque on i from this contact at the last evaluation (`compute pair/gran/local`).
     torque: Vec3,
+    /// Centres closer than (1 + RECEIVER_GAP)(r_i + r_j) at the last evaluation: the pair may
+    /// receive multi-contact terms (growth could make it touch). True for a new pair.
+    near: bool,
 }
 
 /// One touching particle pair as output sees it (indices into the particle arrays).
@@ -345,7 +348,11 @@ pub struct World {
     loads: Vec<ContactLoad>,
     dr_buf: Vec<f64>,
     fb_buf: Vec<bool>,
-    loaded: Vec<bool>,
+    /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
+    /// contact appeared or left, a pair entered or left the multi-contact set).
+    slots_stale: bool,
+    /// Per pair: contact points relative to i and to j for this step's multi-contact pass.
+    pair_points: Vec<[Vec3; 2]>,
     pair_out: Vec<PairForce>,
     pair_mc: Vec<bool>,
     f_buf: Vec<Vec3>,
@@ -618,9 +625,11 @@ impl World {
                     drj: 0.0,
                     force: Vec3::zeros(),
                     torque: Vec3::zeros(),
+                    near: true,
                 },
             });
         }
+        self.slots_stale = true;
         self.x_build.clear();
         self.x_build.extend_from_slice(&self.p.x);
         self.le_offset_build = domain.le_offset;
@@ -675,57 +684,25 @@ impl World {
                 }
             }
         }
+        if self.wc.len() != self.wc_old.len()
+            || self.wc.iter().zip(&self.wc_old).any(|(a, b)| a.key() != b.key())
+        {
+            self.slots_stale = true;
+        }
     }
 
-    /// Multi-contact pass (LIGGGHTS `fix multicontact/halfspace` pre_force): radius change of
-    /// every particle at every one of its contacts from the previous step's normal forces.
-    fn multicontact(&mut self) -> Result<(), StepError> {
+    /// Per particle, the list of its multi-contact slots (pairs in pair order, then wall
+    /// contacts), as compressed rows. Rebuilt only when the pairs or wall contacts changed.
+    fn build_slots(&mut self) {
         let n = self.p.len();
-        let domain = self.domain.expect("domain checked in setup");
-        for pr in &mut self.pairs {
-            pr.dri = 0.0;
-            pr.drj = 0.0;
-        }
-        for c in &mut self.wc {
-            c.dr = 0.0;
-        }
-        // Count contacts per particle, and flag particles with a loaded contact: only those
-        // (with two or more contacts) do any multi-contact work.
         self.slot_start.clear();
         self.slot_start.resize(n + 1, 0);
-        self.loaded.clear();
-        self.loaded.resize(n, false);
-        let eps = |i: usize, s: &Self| {
-            let m = &s.mc_types[s.p.typ[i]].material;
-            m.youngs_modulus
-                * s.p.radius[i]
-                * s.p.radius[i]
-                * crate::physics::contact_set::LOADED_FORCE_FACTOR
-        };
-        // A pair takes part only if loaded or close enough that radius growth could make it touch
-        // (gap below RECEIVER_GAP of the radii): far candidates would only cost kernel time.
-        self.pair_mc.clear();
-        for pr in &self.pairs {
-            let (i, j) = (pr.i as usize, pr.j as usize);
-            let mut d = self.p.x[i] - self.p.x[j];
-            domain.minimum_image(&mut d);
-            let reach = (1.0 + RECEIVER_GAP) * (self.p.radius[i] + self.p.radius[j]);
-            self.pair_mc.push(pr.fn_prev > 0.0 || d.norm_squared() < reach * reach);
-        }
         for (pr, _) in self.pairs.iter().zip(&self.pair_mc).filter(|(_, m)| **m) {
-            let (i, j) = (pr.i as usize, pr.j as usize);
-            self.slot_start[i + 1] += 1;
-            self.slot_start[j + 1] += 1;
-            if pr.fn_prev > 0.0 {
-                self.loaded[i] = true;
-                self.loaded[j] = true;
-            }
+            self.slot_start[pr.i as usize + 1] += 1;
+            self.slot_start[pr.j as usize + 1] += 1;
         }
         for c in &self.wc {
             self.slot_start[c.p as usize + 1] += 1;
-            if c.fn_prev > 0.0 {
-                self.loaded[c.p as usize] = true;
-            }
         }
         for i in 0..n {
             self.slot_start[i + 1] += self.slot_start[i];
@@ -750,37 +727,75 @@ impl World {
             self.slots[self.slot_fill[i] as usize] = Slot::Wall(k as u32);
             self.slot_fill[i] += 1;
         }
+        self.slots_stale = false;
+    }
+
+    /// Multi-contact pass (LIGGGHTS `fix multicontact/halfspace` pre_force): radius change of
+    /// every particle at every one of its contacts from the previous step's normal forces.
+    fn multicontact(&mut self) -> Result<(), StepError> {
+        let n = self.p.len();
+        let domain = self.domain.expect("domain checked in setup");
+        for pr in &mut self.pairs {
+            pr.dri = 0.0;
+            pr.drj = 0.0;
+        }
+        for c in &mut self.wc {
+            c.dr = 0.0;
+        }
+        // A pair takes part if loaded, or close enough that radius growth could make it touch
+        // (gap below RECEIVER_GAP of the radii at the last evaluation; a pair moves far less than
+        // that in a step): far candidates would only cost kernel time.
+        if self.pair_mc.len() != self.pairs.len() {
+            self.pair_mc.clear();
+            self.pair_mc.resize(self.pairs.len(), false);
+            self.slots_stale = true;
+        }
+        for (m, pr) in self.pair_mc.iter_mut().zip(&self.pairs) {
+            let now = pr.fn_prev > 0.0 || pr.near;
+            if *m != now {
+                *m = now;
+                self.slots_stale = true;
+            }
+        }
+        if self.slots_stale {
+            self.build_slots();
+        }
+        // Contact points once per pair, both sides from one centre distance. As LIGGGHTS: the
+        // midpoint of the modified spheres' surfaces along the centre line when loaded, else
+        // each particle's own surface point.
+        self.pair_points.resize(self.pairs.len(), [Vec3::zeros(); 2]);
+        let (p, types) = (&self.p, &self.mc_types);
+        // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
+        let eps = |a: usize| {
+            types[p.typ[a]].material.youngs_modulus
+                * p.radius[a]
+                * p.radius[a]
+                * crate::physics::contact_set::LOADED_FORCE_FACTOR
+        };
+        for ((pr, pts), _) in
+            self.pairs.iter().zip(self.pair_points.iter_mut()).zip(&self.pair_mc).filter(|(_, m)| **m)
+        {
+            let (a, b) = (pr.i as usize, pr.j as usize);
+            let mut xab = p.x[b] - p.x[a];
+            domain.minimum_image(&mut xab);
+            let len = xab.norm().max(1e-300);
+            *pts = if pr.fn_prev > eps(a) {
+                let tmp = xab * ((pr.ri_prev - pr.rj_prev) * 0.5 / len);
+                [tmp + 0.5 * xab, tmp - 0.5 * xab]
+            } else {
+                [xab * (pr.ri_prev / len), -xab * (pr.rj_prev / len)]
+            };
+        }
         for i in 0..n {
             let (s0, s1) = (self.slot_start[i] as usize, self.slot_start[i + 1] as usize);
-            if s1 - s0 < 2 || !self.loaded[i] {
+            if s1 - s0 < 2 {
                 continue;
             }
             self.loads.clear();
             for s in &self.slots[s0..s1] {
                 let (point, force) = match *s {
-                    Slot::PairI(k) | Slot::PairJ(k) => {
-                        let pr = &self.pairs[k as usize];
-                        let (a, b) = (pr.i as usize, pr.j as usize);
-                        let mut xab = self.p.x[b] - self.p.x[a];
-                        domain.minimum_image(&mut xab);
-                        let len = xab.norm().max(1e-300);
-                        let eps_a = eps(a, self);
-                        // Contact point as LIGGGHTS: midpoint of the modified spheres' surfaces
-                        // along the centre line when loaded, else the own surface point.
-                        let rel = if pr.fn_prev > eps_a {
-                            let tmp = xab * ((pr.ri_prev - pr.rj_prev) * 0.5 / len);
-                            if matches!(s, Slot::PairI(_)) {
-                                tmp + 0.5 * xab
-                            } else {
-                                tmp - 0.5 * xab
-                            }
-                        } else if matches!(s, Slot::PairI(_)) {
-                            xab * (pr.ri_prev / len)
-                        } else {
-                            -xab * (pr.rj_prev / len)
-                        };
-                        (rel, pr.fn_prev)
-                    }
+                    Slot::PairI(k) => (self.pair_points[k as usize][0], self.pairs[k as usize].fn_prev),
+                    Slot::PairJ(k) => (self.pair_points[k as usize][1], self.pairs[k as usize].fn_prev),
                     Slot::Wall(k) => {
                         let c = &self.wc[k as usize];
                         (c.rel_prev, c.fn_prev)
@@ -1145,7 +1160,10 @@ impl PairCtx<'_> {
         let kimg = self.domain.minimum_image_k(&mut d);
         let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
         let radsum = ri + rj;
-        if d.norm_squared() >= radsum * radsum {
+        let d2 = d.norm_squared();
+        let reach = (1.0 + RECEIVER_GAP) * (p.radius[i] + p.radius[j]);
+        pr.near = d2 < reach * reach;
+        if d2 >= radsum * radsum {
             // The force is output, not history: the set-up pass records it too.
             pr.force = Vec3::zeros();
             pr.torque = Vec3::zeros();

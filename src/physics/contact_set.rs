@@ -5,10 +5,11 @@
 //! The caller owns every buffer: no allocation per call. A particle with fewer than two loaded
 //! contacts has no neighbour terms and returns at once with all Δ = 0.
 
+use std::cell::RefCell;
 use std::fmt;
 
-use super::brodu2015::{bracket_pair, compliance_prefactor, MIN_CHORD};
-use super::ghods2022::Cap;
+use super::brodu2015::{bracket_pair_over_chord, compliance_prefactor};
+use super::ghods2022::{Cap, MprTest};
 use super::material::{
     check, check_gamma, check_mpr, check_poisson_ratio, check_youngs_modulus, Material, MaterialError,
 };
@@ -181,60 +182,23 @@ pub fn radius_changes(
     }
     let nu = p.poisson_ratio;
     let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
-    let cap = p.cap.map(|cap| (cap, cap.delta_max(p.radius)));
-    // Inward normals once per contact (n sqrt instead of n² ); a particle has far fewer than
-    // NORMALS_ON_STACK contacts, beyond that they are recomputed per pair instead of allocated.
-    const NORMALS_ON_STACK: usize = 32;
-    let mut normals = [Vec3::zeros(); NORMALS_ON_STACK];
-    let inward = |c: &ContactLoad| {
-        let l = c.point.norm();
-        if l > 0.0 {
-            -c.point / l
-        } else {
-            Vec3::zeros()
+    SCRATCH.with(|s| {
+        let s = &mut *s.borrow_mut();
+        s.load(contacts, pref, threshold);
+        match p.cap.map(|c| c.test) {
+            None => s.sum_terms::<NO_CAP>(nu, &mut delta[..n]),
+            Some(MprTest::Abs) => s.sum_terms::<ABS_CAP>(nu, &mut delta[..n]),
+            Some(MprTest::Signed) => s.sum_terms::<SIGNED_CAP>(nu, &mut delta[..n]),
         }
-    };
-    if n <= NORMALS_ON_STACK {
-        for (nv, c) in normals.iter_mut().zip(contacts) {
-            *nv = inward(c);
-        }
-    }
-    let normal = |i: usize| if n <= NORMALS_ON_STACK { normals[i] } else { inward(&contacts[i]) };
-    // Each unordered pair once: the chord (one sqrt) serves both directions a→b and b→a. `delta`
-    // accumulates the sums and `hertz_fallback` the trips; for every target the terms still arrive
-    // in increasing source index, so the sum does not depend on how the pairs are visited.
-    let add = |target: usize, term: f64, delta: &mut [f64], tripped: &mut [bool]| {
-        if let Some((cap, dm)) = cap {
-            if cap.trips(term, dm) {
-                tripped[target] = true;
+        if let Some(cap) = p.cap {
+            // The peak term trips the cap exactly when one of the terms does (peaks start at 0
+            // and δ_max ≥ 0), so this is Eq. 3's per-term test.
+            let dm = cap.delta_max(p.radius);
+            for (t, &pk) in hertz_fallback[..n].iter_mut().zip(&s.peak) {
+                *t = cap.trips(pk, dm);
             }
         }
-        delta[target] += term;
-    };
-    for (a, ca) in contacts.iter().enumerate() {
-        let (pa, fa) = (ca.point, ca.force);
-        let na = normal(a);
-        for (b, cb) in contacts.iter().enumerate().skip(a + 1) {
-            let (pb, fb) = (cb.point, cb.force);
-            let (a_loaded, b_loaded) = (fa > threshold, fb > threshold);
-            if !(a_loaded || b_loaded) {
-                continue;
-            }
-            let chord = pb - pa;
-            let d = chord.norm();
-            let nb = normal(b);
-            if d < MIN_CHORD || na == Vec3::zeros() || nb == Vec3::zeros() {
-                continue;
-            }
-            let (b_ab, b_ba) = bracket_pair(&na, &nb, &(chord / d), nu);
-            if a_loaded {
-                add(b, pref * fa / d * b_ab, delta, hertz_fallback);
-            }
-            if b_loaded {
-                add(a, pref * fb / d * b_ba, delta, hertz_fallback);
-            }
-        }
-    }
+    });
     let mut fallbacks = 0;
     for (i, (dv, tripped)) in delta[..n].iter_mut().zip(&hertz_fallback[..n]).enumerate() {
         if *tripped {
@@ -245,4 +209,107 @@ pub fn radius_changes(
         }
     }
     Ok(KernelSummary { loaded, fallbacks })
+}
+
+/// Which per-term measure the peak tracks (a const parameter, so each variant compiles to its own
+/// loop): none for standard MC, |δ| or δ for the two `mprTest` readings of Eq. 3.
+const NO_CAP: u8 = 0;
+const ABS_CAP: u8 = 1;
+const SIGNED_CAP: u8 = 2;
+
+thread_local! {
+    /// Working memory of the kernel, one per thread: grown to the largest contact set seen and
+    /// reused, so a call allocates nothing once warm (the LIGGGHTS plugin calls it per particle).
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// The contacts of one particle by component (structure of arrays): the pair loop then runs over
+/// contiguous lanes, which the compiler vectorises (sqrt and divisions two or four at a time).
+#[derive(Default)]
+struct Scratch {
+    px: Vec<f64>,
+    py: Vec<f64>,
+    pz: Vec<f64>,
+    nx: Vec<f64>,
+    ny: Vec<f64>,
+    nz: Vec<f64>,
+    /// Source weight −γ(1+ν)/(2πE) · F_k; zero for an unloaded contact (it exerts nothing).
+    w: Vec<f64>,
+    /// Largest neighbour term received so far, in the cap's measure (starts at 0).
+    peak: Vec<f64>,
+    /// Terms the current source receives back from the later contacts (summed in order after).
+    back: Vec<f64>,
+}
+
+impl Scratch {
+    fn load(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64) {
+        let lanes =
+            [&mut self.px, &mut self.py, &mut self.pz, &mut self.nx, &mut self.ny, &mut self.nz, &mut self.w];
+        for v in lanes {
+            v.clear();
+        }
+        for c in contacts {
+            let l = c.point.norm();
+            // A point at the centre has no normal: zero normal and weight make the contact
+            // neither exert nor receive a term (every term carries a normal or the weight).
+            let (n, w) = if l > 0.0 {
+                (-c.point / l, if c.force > threshold { pref * c.force } else { 0.0 })
+            } else {
+                (Vec3::zeros(), 0.0)
+            };
+            self.px.push(c.point.x);
+            self.py.push(c.point.y);
+            self.pz.push(c.point.z);
+            self.nx.push(n.x);
+            self.ny.push(n.y);
+            self.nz.push(n.z);
+            self.w.push(w);
+        }
+        let n = contacts.len();
+        self.peak.clear();
+        self.peak.resize(n, 0.0);
+        self.back.clear();
+        self.back.resize(n, 0.0);
+    }
+
+    /// Eq. 2 summed over every source for every target, each unordered pair visited once (one
+    /// chord and one square root serve both directions). For every target the terms arrive in
+    /// increasing source index, so the sums do not depend on how the pairs are visited.
+    #[inline(always)]
+    fn sum_terms<const CAP: u8>(&mut self, nu: f64, delta: &mut [f64]) {
+        let n = delta.len();
+        let (px, py, pz) = (&self.px[..n], &self.py[..n], &self.pz[..n]);
+        let (nx, ny, nz, w) = (&self.nx[..n], &self.ny[..n], &self.nz[..n], &self.w[..n]);
+        let (peak, back) = (&mut self.peak[..n], &mut self.back[..n]);
+        let measure = |t: f64| if CAP == SIGNED_CAP { t } else { t.abs() };
+        for a in 0..n {
+            let (pax, pay, paz) = (px[a], py[a], pz[a]);
+            let (nax, nay, naz, wa) = (nx[a], ny[a], nz[a], w[a]);
+            for b in a + 1..n {
+                let (cx, cy, cz) = (px[b] - pax, py[b] - pay, pz[b] - paz);
+                let d2 = cx * cx + cy * cy + cz * cz;
+                let a_c = nax * cx + nay * cy + naz * cz;
+                let b_c = nx[b] * cx + ny[b] * cy + nz[b] * cz;
+                let ab = nax * nx[b] + nay * ny[b] + naz * nz[b];
+                // Coincident points give (0, 0): the half-space kernel is singular there and the
+                // local Hertz term already carries the load.
+                let (g_ab, g_ba) = bracket_pair_over_chord(a_c, b_c, ab, d2, nu);
+                let t_ab = g_ab * wa;
+                back[b] = g_ba * w[b];
+                delta[b] += t_ab;
+                if CAP != NO_CAP {
+                    peak[b] = peak[b].max(measure(t_ab));
+                }
+            }
+            let (mut acc, mut pk) = (delta[a], peak[a]);
+            for &t in &back[a + 1..n] {
+                acc += t;
+                if CAP != NO_CAP {
+                    pk = pk.max(measure(t));
+                }
+            }
+            delta[a] = acc;
+            peak[a] = pk;
+        }
+    }
 }
