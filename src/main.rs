@@ -33,6 +33,11 @@ enum Command {
         /// No progress bar even on a terminal
         #[arg(long)]
         no_progress: bool,
+        /// Multi-contact geometry tolerance, as a fraction of the particle radius: keep each
+        /// particle's Eq. 2 geometry until a contact point moved this far (0 = exact, the default;
+        /// an approximation that trades accuracy for speed, see docs/dem.md)
+        #[arg(long, default_value_t = 0.0)]
+        mc_geometry_tolerance: f64,
     },
     /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path
     Nonlocal {
@@ -224,9 +229,27 @@ fn validate(quick: bool, cases: Vec<String>, out: PathBuf) -> Result<(), String>
     }
 }
 
-fn run(deck: PathBuf, var: Vec<String>, log: Option<PathBuf>, no_progress: bool) -> Result<(), String> {
+fn run(
+    deck: PathBuf,
+    var: Vec<String>,
+    log: Option<PathBuf>,
+    no_progress: bool,
+    mc_geometry_tolerance: f64,
+) -> Result<(), String> {
+    if !(mc_geometry_tolerance.is_finite() && mc_geometry_tolerance >= 0.0) {
+        return Err(format!(
+            "ERROR: --mc-geometry-tolerance must be a finite number >= 0 (a fraction of the particle radius), got {mc_geometry_tolerance}"
+        ));
+    }
     let vars = var.chunks(2).map(|c| (c[0].clone(), c[1].clone())).collect();
-    let opts = mcdem::deck::Options { vars, log, progress: !no_progress, quiet: false, ..Default::default() };
+    let opts = mcdem::deck::Options {
+        vars,
+        log,
+        progress: !no_progress,
+        quiet: false,
+        mc_geometry_tolerance,
+        ..Default::default()
+    };
     mcdem::deck::run_file(&deck, &opts).map(|_| ()).map_err(|e| format!("ERROR: {e}"))
 }
 
@@ -362,7 +385,9 @@ fn main() -> ExitCode {
         // The time loop runs on a worker of the thread pool: the pair loop's parallel halves then
         // start on this thread while the other worker is still spinning from the previous step,
         // instead of a blocked caller waking sleeping workers every step.
-        Command::Run { deck, var, log, no_progress } => rayon::scope(|_| run(deck, var, log, no_progress)),
+        Command::Run { deck, var, log, no_progress, mc_geometry_tolerance } => {
+            rayon::scope(|_| run(deck, var, log, no_progress, mc_geometry_tolerance))
+        }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json } => bench(quick, json),
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),

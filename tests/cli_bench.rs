@@ -47,6 +47,15 @@ fn quick_bench_writes_rows_and_ratios() {
             assert!(has("rust", model, "hydrogel_514"), "rust hydrogel {model}");
         }
         assert!(ratios.contains_key("rust 1 thread: mc_advanced / hertz"));
+        // The approximate rows carry their accuracy: a finite error against the exact run, below
+        // the bound the tolerance sets (docs/dem.md: 6e-5 and 6e-4 of the force range measured).
+        let errors = v["errors"].as_object().unwrap();
+        for (tol, bound) in [("1e-4", 1e-3), ("1e-3", 1e-2)] {
+            let key = format!("hydrogel rust mc_advanced tol={tol}: max piston-force error / range vs exact");
+            let e = errors[&key].as_f64().unwrap();
+            assert!(e.is_finite() && e < bound, "{key}: {e}");
+            assert!(ratios.contains_key(&format!("rust 1 thread: mc_advanced tol={tol} / hertz")));
+        }
         if std::process::Command::new("liggghts").arg("-h").output().is_ok() {
             assert!(has("liggghts", "hertz", "hydrogel_514"));
             assert!(ratios.contains_key("hertz: rust 1 thread / liggghts"));

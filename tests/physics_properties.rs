@@ -3,7 +3,7 @@
 //! the cap limits hold exactly, and the pair force obeys Newton's third law and torque balance.
 
 use mcdem::physics::brodu2015::{bracket_on_sphere, compliance_prefactor, displacement};
-use mcdem::physics::contact_set::{radius_changes, ContactLoad, McParams};
+use mcdem::physics::contact_set::{influence, radius_changes, radius_changes_with, ContactLoad, McParams};
 use mcdem::physics::ghods2022::{Cap, MprTest};
 use mcdem::physics::hertz::Tangential;
 use mcdem::physics::material::{Material, PairCoeffs};
@@ -77,6 +77,29 @@ proptest! {
         prop_assert!(zero.iter().all(|v| *v == 0.0), "MPR = 0 must give no correction: {:?}", zero);
         prop_assert_eq!(run(Some(Cap { mpr: 1e9, test: MprTest::Abs })), standard.clone());
         prop_assert_eq!(run(Some(Cap { mpr: 1e9, test: MprTest::Signed })), standard);
+    }
+
+    /// The geometry-tolerance path (influence matrix, then this step's forces) is the kernel to
+    /// round-off when the matrix is fresh: same terms, same summation order, same cap decisions.
+    #[test]
+    fn influence_matrix_times_forces_is_the_kernel(p in params(), cs in prop::collection::vec(contact(), 0..14)) {
+        let n = cs.len();
+        let (mut d1, mut f1) = (vec![0.0; n], vec![false; n]);
+        let (mut d2, mut f2) = (vec![0.0; n], vec![false; n]);
+        let s1 = radius_changes(&p, &cs, &mut d1, &mut f1).unwrap();
+        let mut g = vec![f64::NAN; n * n];
+        influence(&p, &cs, &mut g).unwrap();
+        prop_assert!(g.iter().all(|v| v.is_finite()));
+        let s2 = radius_changes_with(&p, &g, &cs, &mut d2, &mut f2).unwrap();
+        prop_assert_eq!(s1, s2);
+        prop_assert_eq!(f1, f2);
+        let threshold = p.loaded_threshold();
+        for (c, (a, b)) in d1.iter().zip(&d2).enumerate() {
+            let scale: f64 = cs.iter().enumerate().filter(|(k, ck)| *k != c && ck.force > threshold)
+                .map(|(_, ck)| displacement(&ck.point, &cs[c].point, ck.force, p.gamma, p.youngs_modulus, p.poisson_ratio).abs())
+                .sum();
+            prop_assert!((a - b).abs() <= 1e-13 * scale, "contact {}: {} vs {} (scale {})", c, a, b, scale);
+        }
     }
 
     #[test]

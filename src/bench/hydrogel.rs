@@ -40,17 +40,47 @@ fn on_path(name: &str) -> bool {
 
 /// Runs one deck; returns (seconds, particle-steps per second).
 fn measure(cmd: &mut Command, what: &str) -> Result<(f64, f64), String> {
+    measure_force(cmd, what).map(|(t, r, _)| (t, r))
+}
+
+/// Runs one deck; returns (seconds, particle-steps per second, piston force column of the deck's
+/// `fix ave/time` file).
+fn measure_force(cmd: &mut Command, what: &str) -> Result<(f64, f64, Vec<f64>), String> {
     let work = std::env::temp_dir().join(format!("mcdem-bench-{}", std::process::id()));
     std::fs::create_dir_all(&work).map_err(|e| e.to_string())?;
     let out = cmd.current_dir(&work).output().map_err(|e| format!("{what}: cannot start: {e}"))?;
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let force: Vec<f64> = std::fs::read_to_string(work.join("piston_force.txt"))
+        .unwrap_or_default()
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .filter_map(|l| l.split_whitespace().nth(3)?.parse().ok())
+        .collect();
     let _ = std::fs::remove_dir_all(&work);
     if !out.status.success() {
         let tail: Vec<&str> = text.lines().rev().take(5).collect();
         return Err(format!("{what} failed: {}", tail.join(" | ")));
     }
     let (t, steps, atoms) = loop_time(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
-    Ok((t, steps * atoms as f64 / t))
+    Ok((t, steps * atoms as f64 / t, force))
+}
+
+/// Largest piston-force difference over the force range of `exact`.
+fn force_error(exact: &[f64], other: &[f64]) -> f64 {
+    let range =
+        exact.iter().cloned().fold(f64::MIN, f64::max) - exact.iter().cloned().fold(f64::MAX, f64::min);
+    if exact.len() != other.len() || range <= 0.0 {
+        return f64::NAN;
+    }
+    exact.iter().zip(other).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / range
+}
+
+/// Geometry tolerances of the `mc_advanced` rows beside the exact one (fractions of the radius).
+pub const TOLERANCES: [f64; 2] = [1e-4, 1e-3];
+
+/// The model name of a tolerance row.
+pub fn tolerance_model(tol: f64) -> String {
+    format!("mc_advanced tol={tol:e}")
 }
 
 pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
@@ -109,17 +139,36 @@ pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Re
             }
         }
     }
-    // Rust DEM, 1 and 2 threads.
+    // Rust DEM, 1 and 2 threads; `mc_advanced` also with geometry tolerances (1 thread), each
+    // with its piston-force error against the exact run.
     let me = std::env::current_exe().map_err(|e| e.to_string())?;
+    let mut exact = Vec::new();
+    let rust = |law: &str, threads: usize, tol: f64, model: &str| {
+        let mut c = Command::new(&me);
+        c.arg("run").arg(&deck).args(vars(law)).args(["-log", "none", "--no-progress"]);
+        c.arg(format!("--mc-geometry-tolerance={tol}"));
+        c.env("RAYON_NUM_THREADS", threads.to_string());
+        measure_force(&mut c, &format!("mcdem run {model}"))
+    };
     for (law, model) in LAWS {
         for threads in [1usize, 2] {
-            let mut c = Command::new(&me);
-            c.arg("run").arg(&deck).args(vars(law)).args(["-log", "none", "--no-progress"]);
-            c.env("RAYON_NUM_THREADS", threads.to_string());
-            let r = measure(&mut c, &format!("mcdem run {model}"))?;
-            say(&format!("hydrogel, rust {model}, {threads} thread(s): {:.3e} particle-steps/s", r.1));
-            push(report, "rust", model, threads, r);
+            let (t, rate, force) = rust(law, threads, 0.0, model)?;
+            say(&format!("hydrogel, rust {model}, {threads} thread(s): {rate:.3e} particle-steps/s"));
+            push(report, "rust", model, threads, (t, rate));
+            if law == "0" && threads == 1 {
+                exact = force;
+            }
         }
+    }
+    for tol in TOLERANCES {
+        let model = tolerance_model(tol);
+        let (t, rate, force) = rust("0", 1, tol, &model)?;
+        let err = force_error(&exact, &force);
+        say(&format!(
+            "hydrogel, rust {model}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"
+        ));
+        push(report, "rust", &model, 1, (t, rate));
+        report.errors.insert(format!("hydrogel rust {model}: max piston-force error / range vs exact"), err);
     }
     Ok(())
 }

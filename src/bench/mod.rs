@@ -42,6 +42,8 @@ pub struct Report {
     pub ratios: BTreeMap<String, f64>,
     /// Which row groups ran, and why others did not.
     pub notes: Vec<String>,
+    /// Accuracy paid for speed: named errors of approximate rows against their exact run.
+    pub errors: BTreeMap<String, f64>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -87,6 +89,12 @@ fn ratios(r: &mut Report) {
             out.insert(name.to_string(), v);
         }
     }
+    for tol in hydrogel::TOLERANCES {
+        let m = hydrogel::tolerance_model(tol);
+        if let Some(v) = cost(find(r, "rust", &m, h, 1), find(r, "rust", "hertz", h, 1)) {
+            out.insert(format!("rust 1 thread: {m} / hertz"), v);
+        }
+    }
     // Cost per particle-step across packing sizes, relative to the smallest (1 thread).
     let sizes: Vec<&Row> = r
         .rows
@@ -105,12 +113,12 @@ fn ratios(r: &mut Report) {
 /// A plain-text table of the report.
 pub fn table(r: &Report) -> String {
     let mut s = format!(
-        "{:<9} {:<12} {:<28} {:>7} {:>3} {:>14} {:>10}\n",
+        "{:<9} {:<22} {:<28} {:>7} {:>3} {:>14} {:>10}\n",
         "engine", "model", "scene", "n", "thr", "particle-st/s", "wall [s]"
     );
     for x in &r.rows {
         s.push_str(&format!(
-            "{:<9} {:<12} {:<28} {:>7} {:>3} {:>14.4e} {:>10.2}{}\n",
+            "{:<9} {:<22} {:<28} {:>7} {:>3} {:>14.4e} {:>10.2}{}\n",
             x.engine,
             x.model,
             x.scene,
@@ -124,6 +132,12 @@ pub fn table(r: &Report) -> String {
     s.push_str("\nratios (cost, > 1 = slower):\n");
     for (k, v) in &r.ratios {
         s.push_str(&format!("  {k:<60} {v:.2}\n"));
+    }
+    if !r.errors.is_empty() {
+        s.push_str("\nerrors of approximate rows:\n");
+        for (k, v) in &r.errors {
+            s.push_str(&format!("  {k:<60} {v:.2e}\n"));
+        }
     }
     for n in &r.notes {
         s.push_str(&format!("note: {n}\n"));

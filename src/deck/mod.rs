@@ -35,6 +35,8 @@ pub struct Options {
     pub quiet: bool,
     /// Thread use of the pair loop (default: timing probe); results do not depend on it.
     pub pair_threads: crate::engine::PairThreads,
+    /// Multi-contact geometry tolerance ([`crate::engine::World::mc_geometry_tolerance`]; 0 = exact).
+    pub mc_geometry_tolerance: f64,
 }
 
 /// Runs a deck file. Errors come back as `FILE:LINE: message`.
@@ -217,6 +219,7 @@ impl Deck {
         let mut world = World::new();
         world.skin = 0.0;
         world.pair_threads = opts.pair_threads;
+        world.mc_geometry_tolerance = opts.mc_geometry_tolerance;
         Ok(Deck {
             world,
             vars,
@@ -1649,6 +1652,7 @@ impl Deck {
         let t0 = Instant::now();
         let end = self.world.step + nsteps;
         let builds0 = self.world.builds;
+        let updates0 = self.world.mc_influence_updates;
         while self.world.step < end {
             self.world.step().map_err(|e| e.to_string())?;
             let last = self.world.step == end;
@@ -1676,8 +1680,19 @@ impl Deck {
         self.summary.loop_seconds += secs;
         self.summary.neighbor_builds += self.world.builds - builds0;
         let rate = if secs > 0.0 { nsteps as f64 * np as f64 / secs } else { 0.0 };
+        // With a geometry tolerance: how often a particle's Eq. 2 geometry was recomputed.
+        let geometry = if self.world.mc_geometry_tolerance > 0.0 {
+            let updates = self.world.mc_influence_updates - updates0;
+            format!(
+                ", multi-contact geometry tolerance {:e}: recomputed in {:.2} % of particle-steps",
+                self.world.mc_geometry_tolerance,
+                100.0 * updates as f64 / (nsteps as f64 * np as f64).max(1.0)
+            )
+        } else {
+            String::new()
+        };
         self.say(&format!(
-            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} threads, {} neighbour builds)\n",
+            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} threads, {} neighbour builds{geometry})\n",
             rayon::current_num_threads(),
             self.world.builds - builds0
         ));

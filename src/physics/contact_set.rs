@@ -184,23 +184,34 @@ pub fn radius_changes(
     let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
     SCRATCH.with(|s| {
         let s = &mut *s.borrow_mut();
-        s.load(contacts, pref, threshold);
+        s.load(contacts, pref, threshold, false);
         match p.cap.map(|c| c.test) {
             None => s.sum_terms::<NO_CAP>(nu, &mut delta[..n]),
             Some(MprTest::Abs) => s.sum_terms::<ABS_CAP>(nu, &mut delta[..n]),
             Some(MprTest::Signed) => s.sum_terms::<SIGNED_CAP>(nu, &mut delta[..n]),
         }
-        if let Some(cap) = p.cap {
-            // The peak term trips the cap exactly when one of the terms does (peaks start at 0
-            // and δ_max ≥ 0), so this is Eq. 3's per-term test.
-            let dm = cap.delta_max(p.radius);
-            for (t, &pk) in hertz_fallback[..n].iter_mut().zip(&s.peak) {
-                *t = cap.trips(pk, dm);
-            }
+        let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak)?;
+        Ok(KernelSummary { loaded, fallbacks })
+    })
+}
+
+/// Eq. 3 on the sums: a contact whose peak term trips the cap gets Δ = 0 and the Hertz flag (the
+/// peak trips exactly when one of the terms does: peaks start at 0 and δ_max ≥ 0); every other
+/// Δ must be finite. Returns the number of fallbacks.
+fn finish(
+    p: &McParams,
+    delta: &mut [f64],
+    hertz_fallback: &mut [bool],
+    peak: &[f64],
+) -> Result<usize, KernelError> {
+    if let Some(cap) = p.cap {
+        let dm = cap.delta_max(p.radius);
+        for (t, &pk) in hertz_fallback.iter_mut().zip(peak) {
+            *t = cap.trips(pk, dm);
         }
-    });
+    }
     let mut fallbacks = 0;
-    for (i, (dv, tripped)) in delta[..n].iter_mut().zip(&hertz_fallback[..n]).enumerate() {
+    for (i, (dv, tripped)) in delta.iter_mut().zip(hertz_fallback.iter()).enumerate() {
         if *tripped {
             *dv = 0.0;
             fallbacks += 1;
@@ -208,7 +219,97 @@ pub fn radius_changes(
             return Err(KernelError::NonFiniteResult { contact: i });
         }
     }
-    Ok(KernelSummary { loaded, fallbacks })
+    Ok(fallbacks)
+}
+
+/// Eq. 2's geometric part for one particle's contact set, by source: `g[k·n + c]` =
+/// −γ(1+ν)/(2πE) · B_{k→c} / d_kc, so that Δ_c = Σ_k g[k·n + c] F_k (zero diagonal). It depends on the contact points
+/// only: an engine may keep it while the points move less than a tolerance, and then pays n²
+/// multiply-adds per step ([`radius_changes_with`]) instead of n²/2 square roots and divisions.
+/// Forces in `contacts` are ignored. `g` must hold n² values.
+pub fn influence(p: &McParams, contacts: &[ContactLoad], g: &mut [f64]) -> Result<(), KernelError> {
+    let n = contacts.len();
+    if g.len() < n * n {
+        return Err(KernelError::BufferTooShort { contacts: n, delta: g.len() / n.max(1), fallback: n });
+    }
+    if let Some(i) = contacts.iter().position(|c| !c.point.iter().all(|x| x.is_finite())) {
+        return Err(KernelError::NonFiniteInput { contact: i });
+    }
+    let nu = p.poisson_ratio;
+    let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
+    SCRATCH.with(|s| {
+        let s = &mut *s.borrow_mut();
+        // Every contact as a unit source of weight pref (a point at the centre still gets 0).
+        s.load(contacts, pref, 0.0, true);
+        let (px, py, pz, w) = (&s.px[..n], &s.py[..n], &s.pz[..n], &s.w[..n]);
+        let (nx, ny, nz) = (&s.nx[..n], &s.ny[..n], &s.nz[..n]);
+        for c in 0..n {
+            g[c * n + c] = 0.0;
+        }
+        for a in 0..n {
+            let (pa, na) = ([px[a], py[a], pz[a]], [nx[a], ny[a], nz[a]]);
+            for b in a + 1..n {
+                let (g_ab, g_ba) = chord_terms(pa, na, [px[b], py[b], pz[b]], [nx[b], ny[b], nz[b]], nu);
+                g[a * n + b] = g_ab * w[a];
+                g[b * n + a] = g_ba * w[b];
+            }
+        }
+    });
+    Ok(())
+}
+
+/// [`radius_changes`] from an [`influence`] matrix `g` of the same contacts (their points may have
+/// moved since; the forces are this step's). The terms of each target are summed in increasing
+/// source index, as in [`radius_changes`], so with a fresh `g` the two agree to round-off.
+pub fn radius_changes_with(
+    p: &McParams,
+    g: &[f64],
+    contacts: &[ContactLoad],
+    delta: &mut [f64],
+    hertz_fallback: &mut [bool],
+) -> Result<KernelSummary, KernelError> {
+    let n = contacts.len();
+    if delta.len() < n || hertz_fallback.len() < n || g.len() < n * n {
+        return Err(KernelError::BufferTooShort {
+            contacts: n,
+            delta: delta.len(),
+            fallback: hertz_fallback.len(),
+        });
+    }
+    let threshold = p.loaded_threshold();
+    let mut loaded = 0;
+    for (i, c) in contacts.iter().enumerate() {
+        if !c.force.is_finite() {
+            return Err(KernelError::NonFiniteInput { contact: i });
+        }
+        loaded += usize::from(c.force > threshold);
+    }
+    delta[..n].fill(0.0);
+    hertz_fallback[..n].fill(false);
+    if loaded == 0 || n < 2 || p.gamma == 0.0 {
+        return Ok(KernelSummary { loaded, fallbacks: 0 });
+    }
+    SCRATCH.with(|s| {
+        let s = &mut *s.borrow_mut();
+        // Unloaded contacts exert nothing: their force enters as 0.
+        s.w.clear();
+        s.w.extend(contacts.iter().map(|c| if c.force > threshold { c.force } else { 0.0 }));
+        s.peak.clear();
+        s.peak.resize(n, 0.0);
+        let signed = matches!(p.cap, Some(Cap { test: MprTest::Signed, .. }));
+        // Source by source over all targets: contiguous, independent lanes (vectorised), and each
+        // target still sums its terms in increasing source index.
+        let (delta, peak) = (&mut delta[..n], &mut s.peak[..n]);
+        for (col, &fk) in g.chunks_exact(n).zip(&s.w) {
+            for ((dc, pc), &gk) in delta.iter_mut().zip(peak.iter_mut()).zip(col) {
+                let t = gk * fk;
+                *dc += t;
+                *pc = pc.max(if signed { t } else { t.abs() });
+            }
+        }
+        let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak)?;
+        Ok(KernelSummary { loaded, fallbacks })
+    })
 }
 
 /// Which per-term measure the peak tracks (a const parameter, so each variant compiles to its own
@@ -242,7 +343,9 @@ struct Scratch {
 }
 
 impl Scratch {
-    fn load(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64) {
+    /// Points, normals and source weights pref·F_k; `unit_sources` gives every contact the weight
+    /// pref whatever its force (the influence matrix, which the forces multiply later).
+    fn load(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, unit_sources: bool) {
         let lanes =
             [&mut self.px, &mut self.py, &mut self.pz, &mut self.nx, &mut self.ny, &mut self.nz, &mut self.w];
         for v in lanes {
@@ -253,7 +356,14 @@ impl Scratch {
             // A point at the centre has no normal: zero normal and weight make the contact
             // neither exert nor receive a term (every term carries a normal or the weight).
             let (n, w) = if l > 0.0 {
-                (-c.point / l, if c.force > threshold { pref * c.force } else { 0.0 })
+                let w = if unit_sources {
+                    pref
+                } else if c.force > threshold {
+                    pref * c.force
+                } else {
+                    0.0
+                };
+                (-c.point / l, w)
             } else {
                 (Vec3::zeros(), 0.0)
             };
@@ -283,17 +393,9 @@ impl Scratch {
         let (peak, back) = (&mut self.peak[..n], &mut self.back[..n]);
         let measure = |t: f64| if CAP == SIGNED_CAP { t } else { t.abs() };
         for a in 0..n {
-            let (pax, pay, paz) = (px[a], py[a], pz[a]);
-            let (nax, nay, naz, wa) = (nx[a], ny[a], nz[a], w[a]);
+            let (pa, na, wa) = ([px[a], py[a], pz[a]], [nx[a], ny[a], nz[a]], w[a]);
             for b in a + 1..n {
-                let (cx, cy, cz) = (px[b] - pax, py[b] - pay, pz[b] - paz);
-                let d2 = cx * cx + cy * cy + cz * cz;
-                let a_c = nax * cx + nay * cy + naz * cz;
-                let b_c = nx[b] * cx + ny[b] * cy + nz[b] * cz;
-                let ab = nax * nx[b] + nay * ny[b] + naz * nz[b];
-                // Coincident points give (0, 0): the half-space kernel is singular there and the
-                // local Hertz term already carries the load.
-                let (g_ab, g_ba) = bracket_pair_over_chord(a_c, b_c, ab, d2, nu);
+                let (g_ab, g_ba) = chord_terms(pa, na, [px[b], py[b], pz[b]], [nx[b], ny[b], nz[b]], nu);
                 let t_ab = g_ab * wa;
                 back[b] = g_ba * w[b];
                 delta[b] += t_ab;
@@ -312,4 +414,17 @@ impl Scratch {
             peak[a] = pk;
         }
     }
+}
+
+/// Eq. 2's bracket over the chord, both directions, for contacts a and b given by their points p
+/// and inward normals n. Coincident points give (0, 0): the half-space kernel is singular there
+/// and the local Hertz term already carries the load.
+#[inline(always)]
+fn chord_terms(pa: [f64; 3], na: [f64; 3], pb: [f64; 3], nb: [f64; 3], nu: f64) -> (f64, f64) {
+    let (cx, cy, cz) = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]);
+    let d2 = cx * cx + cy * cy + cz * cz;
+    let a_c = na[0] * cx + na[1] * cy + na[2] * cz;
+    let b_c = nb[0] * cx + nb[1] * cy + nb[2] * cz;
+    let ab = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
+    bracket_pair_over_chord(a_c, b_c, ab, d2, nu)
 }

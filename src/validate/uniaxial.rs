@@ -42,10 +42,10 @@ const CALIBRATION: &str = include_str!("../../validation/reference/calibration_m
 /// The recorded calibration's law for ν, if it has this ν (columns as `mcdem calibrate` writes
 /// them: nu,gamma,mpr,youngs_modulus_pa,…; `#` lines are comments).
 pub fn calibrated(nu: f64) -> Option<Law> {
-    calibration_rows().into_iter().find(|r| (r.0 - nu).abs() < 1e-9).map(|r| Law {
-        youngs_modulus: r.3,
-        ..Law::advanced(r.1, r.2)
-    })
+    calibration_rows()
+        .into_iter()
+        .find(|r| (r.0 - nu).abs() < 1e-9)
+        .map(|r| Law { youngs_modulus: r.3, ..Law::advanced(r.1, r.2) })
 }
 
 /// (ν, γ, MPR, E) of every recorded calibration row.
@@ -54,7 +54,11 @@ fn calibration_rows() -> Vec<(f64, f64, f64, f64)> {
         .lines()
         .filter(|l| !l.starts_with('#') && !l.starts_with("nu,") && !l.trim().is_empty())
         .map(|l| {
-            let v: Vec<f64> = l.split(',').take(4).map(|x| x.trim().parse().expect("recorded calibration: a number")).collect();
+            let v: Vec<f64> = l
+                .split(',')
+                .take(4)
+                .map(|x| x.trim().parse().expect("recorded calibration: a number"))
+                .collect();
             (v[0], v[1], v[2], v[3])
         })
         .collect()
