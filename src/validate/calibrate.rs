@@ -15,7 +15,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::uniaxial::{self, Law, Setup, E_HYDROGEL};
 use crate::nonlocal::KernelKind;
@@ -28,7 +28,7 @@ pub struct Options {
 }
 
 /// The calibrated parameters of one ν.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Fit {
     pub nu: f64,
     pub gamma: f64,
@@ -165,13 +165,48 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
         bar.tick();
     };
     let t = Instant::now();
-    let fits: Vec<Result<Fit, String>> = s
-        .nus
+    // Resumable: every finished ν is appended to a journal in the output directory, and a rerun
+    // with the same mode takes the ν it finds there instead of fitting them again.
+    let journal =
+        opts.out.join(if opts.quick { "calibration_done_quick.jsonl" } else { "calibration_done.jsonl" });
+    let done: Vec<Fit> = std::fs::read_to_string(&journal)
+        .unwrap_or_default()
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Fit>(l).ok())
+        .filter(|f| s.nus.iter().any(|&nu| (nu - f.nu).abs() < 1e-12))
+        .collect();
+    for f in &done {
+        say(&format!(
+            "ν = {}: taken from {} (γ = {:.4}, MPR = {:.4})",
+            f.nu,
+            journal.display(),
+            f.gamma,
+            f.mpr
+        ));
+    }
+    let todo: Vec<f64> =
+        s.nus.iter().copied().filter(|nu| !done.iter().any(|f| (f.nu - nu).abs() < 1e-12)).collect();
+    let append = Mutex::new(());
+    let fits: Vec<Result<Fit, String>> = todo
         .par_iter()
-        .map(|&nu| calibrate_one(nu, &s, kind, &scratch.join(format!("nu{nu}")), &say))
+        .map(|&nu| {
+            let fit = calibrate_one(nu, &s, kind, &scratch.join(format!("nu{nu}")), &say)?;
+            let _g = append.lock();
+            let line = serde_json::to_string(&fit).map_err(|e| e.to_string())? + "\n";
+            use std::io::Write;
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&journal)
+                .and_then(|mut f| f.write_all(line.as_bytes()))
+                .map_err(|e| format!("cannot write {}: {e}", journal.display()))?;
+            Ok(fit)
+        })
         .collect();
     bar.finish_and_clear();
-    let fits: Vec<Fit> = fits.into_iter().collect::<Result<_, _>>()?;
+    let mut fits: Vec<Fit> = fits.into_iter().collect::<Result<_, _>>()?;
+    fits.extend(done);
+    fits.sort_by(|a, b| a.nu.total_cmp(&b.nu));
     write_outputs(opts, &s, kind, &fits, t.elapsed().as_secs_f64())?;
     Ok(fits)
 }
