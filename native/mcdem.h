@@ -92,6 +92,26 @@ int32_t mcdem_validate_mc_params(const mcdem_mc_params *params);
 int32_t mcdem_radius_changes(const mcdem_mc_params *params, const mcdem_contact_load *contacts,
                              size_t n, double *delta, uint8_t *hertz_fallback, size_t *n_fallback);
 
+/* Geometry tolerance (model setting geometryTolerance; mcdem run --mc-geometry-tolerance): a store
+ * of influence matrices (Eq. 2 without the forces), one per slot. A slot's matrix is reused while the
+ * parameters and the number of contacts are the same and every point is within tolerance * radius of
+ * the point it was computed from; otherwise it is recomputed. tolerance = 0 is the exact kernel. */
+typedef struct mcdem_influence_cache mcdem_influence_cache;
+
+/* New store; NULL when tolerance is not finite and >= 0 (reason in mcdem_last_error). */
+mcdem_influence_cache *mcdem_influence_cache_new(double tolerance);
+
+/* Frees a store (NULL is ignored). */
+void mcdem_influence_cache_free(mcdem_influence_cache *cache);
+
+/* Matrices recomputed so far. */
+uint64_t mcdem_influence_cache_recomputed(const mcdem_influence_cache *cache);
+
+/* mcdem_radius_changes through the matrix kept in `slot` (any stable per-particle number). */
+int32_t mcdem_radius_changes_cached(mcdem_influence_cache *cache, size_t slot, const mcdem_mc_params *params,
+                                    const mcdem_contact_load *contacts, size_t n, double *delta,
+                                    uint8_t *hertz_fallback, size_t *n_fallback);
+
 /* Pair coefficients from two materials, restitution e in (0, 1] and friction mu >= 0. */
 int32_t mcdem_pair_coeffs_new(double youngs_i, double poisson_i, double youngs_j, double poisson_j,
                               double restitution, double friction, mcdem_pair_coeffs *out);

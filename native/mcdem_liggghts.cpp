@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <string>
@@ -128,6 +129,31 @@ private:
     bool *target_;
 };
 
+// A keyword with a number >= 0 (`geometryTolerance 1e-3`), parsed strictly: the library's own
+// DoubleSetting reads with atof, which would turn a typo into 0 without a word.
+class NonNegativeSetting : public Setting {
+public:
+    NonNegativeSetting(const char *name, double *target) : Setting(name, 1), target_(target) {}
+    int parseArguments(char **args) {
+        if (name != args[0]) return 0;
+        const char *v = args[1];
+        char *end = NULL;
+        const double d = v ? std::strtod(v, &end) : 0.0;
+        if (!v || end == v || *end != '\0' || !std::isfinite(d) || d < 0.0) {
+            error_message = "model mc_advanced: " + name +
+                            " must be a finite number >= 0 (a fraction of the particle radius), got '" +
+                            (v ? v : "") + "'";
+            return -1;
+        }
+        *target_ = d;
+        return 2;
+    }
+    void print_value(FILE *out) { std::fprintf(out, "%g", *target_); }
+
+private:
+    double *target_;
+};
+
 std::string last_mcdem_error() {
     char buf[512];
     mcdem_last_error(buf, sizeof(buf));
@@ -185,6 +211,8 @@ public:
           limit_force_(false),
           signed_test_(false),
           stock_pair_radii_(false),
+          geometry_tolerance_(0.0),
+          cache_(NULL),
           ntypes_(0),
           sources_ready_(false) {
         // Per-contact record read by the next step's radius changes: pairs the two modified radii
@@ -203,6 +231,8 @@ public:
         c->add_history_offset(kRecordName, record_offset_);
     }
 
+    ~NormalModel() { mcdem_influence_cache_free(cache_); }
+
     void registerSettings(Settings &settings) {
         settings.registerOnOff("tangential_damping", tangential_damping_, true);
         settings.registerOnOff("limitForce", limit_force_);
@@ -211,6 +241,8 @@ public:
             table["mprTest"] = new ChoiceSetting("mprTest", "abs", "signed", &signed_test_);
         if (table.find("pairRadii") == table.end())
             table["pairRadii"] = new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_);
+        if (table.find("geometryTolerance") == table.end())
+            table["geometryTolerance"] = new NonNegativeSetting("geometryTolerance", &geometry_tolerance_);
     }
 
     void postSettings(IContactHistorySetup *, ContactModelBase *) {
@@ -488,6 +520,10 @@ private:
 
     void update_radius_changes() {
         if (!sources_ready_) collect_sources();
+        if (geometry_tolerance_ > 0.0 && !cache_) {
+            cache_ = mcdem_influence_cache_new(geometry_tolerance_);
+            if (!cache_) error->all(FLERR, ("model mc_advanced: " + last_mcdem_error()).c_str());
+        }
         for (size_t s = 0; s < sources_.size(); s++) {
             if (sources_[s].wall) {
                 static_cast<FixContactPropertyAtomWall *>(sources_[s].store)->clear();
@@ -563,7 +599,14 @@ private:
             }
             mcdem_mc_params p = params_[type[i]];
             p.radius = radius[i];
-            if (mcdem_radius_changes(&p, &loads_[0], n, &delta_[0], &fallback_[0], NULL) != MCDEM_OK) {
+            // With a geometry tolerance the slot is the local index: after a sort or an exchange it
+            // holds another particle, whose points differ, so the store recomputes (it tests points,
+            // not identities).
+            const int32_t rc =
+                cache_ ? mcdem_radius_changes_cached(cache_, static_cast<size_t>(i), &p, &loads_[0], n, &delta_[0],
+                                                     &fallback_[0], NULL)
+                       : mcdem_radius_changes(&p, &loads_[0], n, &delta_[0], &fallback_[0], NULL);
+            if (rc != MCDEM_OK) {
                 char msg[700];
                 std::snprintf(msg, sizeof(msg), "model mc_advanced: particle %d, step " BIGINT_FORMAT ": %s", tag[i],
                               update->ntimestep, last_mcdem_error().c_str());
@@ -610,6 +653,10 @@ private:
     // `pairRadii stock`: pairs keep LIGGGHTS's convention (first partner's original radius in R_eff,
     // lever arm and contact point), to reproduce decks run with the stock `surface multicontact`.
     bool stock_pair_radii_;
+    // `geometryTolerance TOL` (> 0): each particle's influence matrix is kept in cache_ (slot = local
+    // index) until one of its contact points moved more than TOL x radius; 0 is the exact kernel.
+    double geometry_tolerance_;
+    mcdem_influence_cache *cache_;
     int ntypes_;
     std::vector<mcdem_mc_params> params_;
     std::vector<std::vector<mcdem_pair_coeffs> > coeffs_;

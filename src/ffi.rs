@@ -9,7 +9,9 @@ use std::cell::RefCell;
 use std::os::raw::c_char;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use crate::physics::contact_set::{radius_changes, ContactLoad, McParams};
+use crate::physics::contact_set::{
+    radius_changes, ContactLoad, InfluenceCache, KernelError, KernelSummary, McParams,
+};
 use crate::physics::ghods2022::{Cap, MprTest};
 use crate::physics::hertz;
 use crate::physics::material::{check_poisson_ratio, check_youngs_modulus, Material, PairCoeffs};
@@ -235,6 +237,88 @@ pub unsafe extern "C" fn mcdem_radius_changes(
     hertz_fallback: *mut u8,
     n_fallback: *mut usize,
 ) -> i32 {
+    // SAFETY: forwarded from the caller's promise.
+    unsafe { kernel_call(params, contacts, n, delta, hertz_fallback, n_fallback, radius_changes) }
+}
+
+/// A store of influence matrices for the geometry tolerance (see [`InfluenceCache`]).
+#[allow(non_camel_case_types)] // the C name, as the other C types here
+pub struct mcdem_influence_cache(InfluenceCache);
+
+/// New store for a geometry tolerance ≥ 0 (a fraction of the particle radius); null on bad input,
+/// with the reason in `mcdem_last_error`. Free it with `mcdem_influence_cache_free`.
+#[no_mangle]
+pub extern "C" fn mcdem_influence_cache_new(tolerance: f64) -> *mut mcdem_influence_cache {
+    match InfluenceCache::new(tolerance) {
+        Ok(c) => Box::into_raw(Box::new(mcdem_influence_cache(c))),
+        Err(e) => {
+            set_error(e.to_string());
+            std::ptr::null_mut()
+        }
+    }
+}
+
+/// Frees a store from `mcdem_influence_cache_new` (null is ignored).
+/// # Safety
+/// `cache` must come from `mcdem_influence_cache_new` and not be used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn mcdem_influence_cache_free(cache: *mut mcdem_influence_cache) {
+    if !cache.is_null() {
+        // SAFETY: created by Box::into_raw in mcdem_influence_cache_new, freed once.
+        drop(unsafe { Box::from_raw(cache) });
+    }
+}
+
+/// Influence matrices (re)computed by this store so far.
+/// # Safety
+/// `cache` must be null (gives 0) or a live store.
+#[no_mangle]
+pub unsafe extern "C" fn mcdem_influence_cache_recomputed(cache: *const mcdem_influence_cache) -> u64 {
+    // SAFETY: null or a live store, by the caller's promise.
+    unsafe { cache.as_ref() }.map_or(0, |c| c.0.recomputed)
+}
+
+/// `mcdem_radius_changes` through the influence matrix kept in `slot` of `cache` (any stable
+/// per-particle number, e.g. a local index): reused while the points are within the store's
+/// tolerance of those it was computed from, recomputed otherwise.
+/// # Safety
+/// As `mcdem_radius_changes`; `cache` must be a live store used by one thread at a time.
+#[no_mangle]
+pub unsafe extern "C" fn mcdem_radius_changes_cached(
+    cache: *mut mcdem_influence_cache,
+    slot: usize,
+    params: *const mcdem_mc_params,
+    contacts: *const mcdem_contact_load,
+    n: usize,
+    delta: *mut f64,
+    hertz_fallback: *mut u8,
+    n_fallback: *mut usize,
+) -> i32 {
+    // SAFETY: null or a live store used by this thread only, by the caller's promise.
+    let Some(cache) = (unsafe { cache.as_mut() }) else {
+        set_error("cache is a null pointer".into());
+        return MCDEM_ERR_NULL;
+    };
+    // SAFETY: forwarded from the caller's promise.
+    unsafe {
+        kernel_call(params, contacts, n, delta, hertz_fallback, n_fallback, |p, cs, d, fb| {
+            cache.0.radius_changes(slot, p, cs, d, fb)
+        })
+    }
+}
+
+/// The checks and buffer views shared by the kernel entry points.
+/// # Safety
+/// As `mcdem_radius_changes`.
+unsafe fn kernel_call(
+    params: *const mcdem_mc_params,
+    contacts: *const mcdem_contact_load,
+    n: usize,
+    delta: *mut f64,
+    hertz_fallback: *mut u8,
+    n_fallback: *mut usize,
+    kernel: impl FnOnce(&McParams, &[ContactLoad], &mut [f64], &mut [bool]) -> Result<KernelSummary, KernelError>,
+) -> i32 {
     guard(|| {
         let p = mc_params(non_null(params, "params")?)?;
         if n == 0 {
@@ -257,7 +341,7 @@ pub unsafe extern "C" fn mcdem_radius_changes(
                 std::slice::from_raw_parts_mut(hertz_fallback.cast::<bool>(), n),
             )
         };
-        let s = radius_changes(&p, cs, d, fb).map_err(|e| FfiError(MCDEM_ERR_NON_FINITE, e.to_string()))?;
+        let s = kernel(&p, cs, d, fb).map_err(|e| FfiError(MCDEM_ERR_NON_FINITE, e.to_string()))?;
         if let Some(nf) = unsafe { n_fallback.as_mut() } {
             *nf = s.fallbacks;
         }

@@ -254,6 +254,9 @@ fn bad_decks_stop_with_one_error_line_naming_the_cause() {
     expect_error((&deck, vec![]), d, &["maxPenetrationRatio", "-1", "type 2"]);
     expect_error((two, vec![("mprtest", "sometimes")]), d, &["mprTest", "sometimes"]);
     expect_error((two, vec![("pairradii", "both")]), d, &["pairRadii", "both"]);
+    expect_error((two, vec![("geomtol", "small")]), d, &["geometryTolerance", "small"]);
+    let deck = edited_deck(d, |t| t.replace("${mkey3} ${mval3}", "geometryTolerance -1e-3"));
+    expect_error((&deck, vec![]), d, &["geometryTolerance", "-1e-3"]);
 
     let deck = edited_deck(d, |t| {
         t.replace("poissonsRatio peratomtype 0.5 0.5", "poissonsRatio peratomtype 0.6 0.5")
@@ -303,6 +306,31 @@ fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
         "hydrogel, one fast stroke: piston F_z NRMSE mc_advanced (MPR 1e9) vs stock multicontact = {e:.3e}"
     );
     assert!(e <= 0.02, "NRMSE {e}");
+}
+
+#[test]
+fn hydrogel_geometry_tolerance_bounds_the_piston_force_error_in_the_plugin() {
+    // `geometryTolerance` keeps each particle's Eq. 2 geometry until a contact point moved that
+    // fraction of its radius (docs/dem.md). Two 3000-step strokes: the piston force stays within a
+    // bound set by the tolerance (6e-4 of the force range measured on the full-speed deck at 1e-3,
+    // the same as the Rust engine's), and the error shrinks with the tolerance.
+    let tmp = TempDir::new().unwrap();
+    let run_tol = |tol: &str| {
+        let out = format!("tol{tol}.txt");
+        let vars = [("stroke", "3000"), ("strokes", "2"), ("every", "10"), ("geomtol", tol), ("out", &out)];
+        run_ok(tmp.path(), "hydrogel.in", &vars);
+        read_ave_time(&tmp.path().join(&out)).iter().map(|r| r[3]).collect::<Vec<f64>>()
+    };
+    let exact = run_tol("0");
+    let range =
+        exact.iter().cloned().fold(f64::MIN, f64::max) - exact.iter().cloned().fold(f64::MAX, f64::min);
+    let worst = |f: Vec<f64>| {
+        assert_eq!(f.len(), exact.len());
+        f.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / range
+    };
+    let (e4, e3) = (worst(run_tol("1e-4")), worst(run_tol("1e-3")));
+    eprintln!("hydrogel plugin, geometry tolerance: max |dF|/range {e4:.2e} (1e-4), {e3:.2e} (1e-3)");
+    assert!(e4 < 2e-4 && e3 < 2e-3 && e4 < e3, "{e4:e} (1e-4), {e3:e} (1e-3)");
 }
 
 #[test]

@@ -77,6 +77,18 @@ struct GranModel {
     mpr_test: MprTest,
     /// `pairRadii stock`: pairs with LIGGGHTS's radius convention (see docs/dem.md).
     stock_pair_radii: bool,
+    /// `geometryTolerance TOL` (mc_advanced): see `World::mc_geometry_tolerance`.
+    geometry_tolerance: Option<f64>,
+}
+
+/// `geometryTolerance` value: a finite number ≥ 0 (a fraction of the particle radius).
+fn geometry_tolerance(x: &str) -> R<f64> {
+    match x.parse::<f64>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
+        _ => Err(format!(
+            "geometryTolerance must be a finite number >= 0 (a fraction of the particle radius), got '{x}'"
+        )),
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -946,6 +958,7 @@ impl Deck {
             surface_mc: false,
             mpr_test: MprTest::Abs,
             stock_pair_radii: false,
+            geometry_tolerance: None,
         };
         let mut k = start;
         while k < a.len() {
@@ -957,6 +970,7 @@ impl Deck {
                 ("surface", Some("default")) => m.surface_mc = false,
                 ("surface", Some("multicontact")) => m.surface_mc = true,
                 ("mprTest", Some(x)) => m.mpr_test = x.parse()?,
+                ("geometryTolerance", Some(x)) => m.geometry_tolerance = Some(geometry_tolerance(x)?),
                 ("pairRadii", Some("modified")) => m.stock_pair_radii = false,
                 ("pairRadii", Some("stock")) => m.stock_pair_radii = true,
                 ("pairRadii", Some(x)) => {
@@ -977,6 +991,9 @@ impl Deck {
         if m.stock_pair_radii && m.model != "mc_advanced" {
             return Err("pairRadii is a setting of model mc_advanced".into());
         }
+        if m.geometry_tolerance.is_some() && m.model != "mc_advanced" {
+            return Err("geometryTolerance is a setting of model mc_advanced".into());
+        }
         if m.model == "mc_advanced" && m.surface_mc {
             return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
         }
@@ -990,6 +1007,10 @@ impl Deck {
         let (m, k) = Self::gran_model(a, 2)?;
         if k != a.len() {
             return Err(unsupported(&format!("pair_style gran keyword {}", a[k])));
+        }
+        // The command-line option, when given, takes precedence over the deck's setting.
+        if let (Some(t), 0.0) = (m.geometry_tolerance, self.world.mc_geometry_tolerance) {
+            self.world.mc_geometry_tolerance = t;
         }
         self.pair = Some(m);
         Ok(())
@@ -1215,6 +1236,10 @@ impl Deck {
                 }
                 // Pairs only: a wall contact always uses the particle's modified radius.
                 ("pairRadii", Some("modified" | "stock")) => {}
+                // The pair style's multi-contact pass serves the walls too.
+                ("geometryTolerance", Some(x)) => {
+                    geometry_tolerance(x)?;
+                }
                 _ => return Err(unsupported(&format!("wall/gran keyword {}", a[k]))),
             }
             k += 2;
@@ -1652,7 +1677,7 @@ impl Deck {
         let t0 = Instant::now();
         let end = self.world.step + nsteps;
         let builds0 = self.world.builds;
-        let updates0 = self.world.mc_influence_updates;
+        let updates0 = self.world.mc_influence_updates();
         while self.world.step < end {
             self.world.step().map_err(|e| e.to_string())?;
             let last = self.world.step == end;
@@ -1682,7 +1707,7 @@ impl Deck {
         let rate = if secs > 0.0 { nsteps as f64 * np as f64 / secs } else { 0.0 };
         // With a geometry tolerance: how often a particle's Eq. 2 geometry was recomputed.
         let geometry = if self.world.mc_geometry_tolerance > 0.0 {
-            let updates = self.world.mc_influence_updates - updates0;
+            let updates = self.world.mc_influence_updates() - updates0;
             format!(
                 ", multi-contact geometry tolerance {:e}: recomputed in {:.2} % of particle-steps",
                 self.world.mc_geometry_tolerance,

@@ -14,7 +14,7 @@ pub mod neighbor;
 
 use std::fmt;
 
-use crate::physics::contact_set::{influence, radius_changes, radius_changes_with, ContactLoad, McParams};
+use crate::physics::contact_set::{radius_changes, ContactLoad, InfluenceCache, McParams};
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::{particle_particle, particle_wall, Body, ContactError, WallPoint};
 use crate::physics::{Material, PairCoeffs, Vec3};
@@ -296,15 +296,6 @@ enum Slot {
     Wall(u32),
 }
 
-/// A particle's influence matrix kept under a geometry tolerance, with the points it was computed
-/// from (its slots are those of the particle's current list: `build_slots` voids it otherwise).
-#[derive(Debug, Default)]
-struct KeptInfluence {
-    points: Vec<Vec3>,
-    g: Vec<f64>,
-    valid: bool,
-}
-
 /// The whole simulated system.
 #[derive(Debug, Default)]
 pub struct World {
@@ -344,8 +335,6 @@ pub struct World {
     /// one of its contact points has moved more than this fraction of its radius since, or its
     /// contact list changed: an approximation whose error `mcdem bench` reports next to its speed.
     pub mc_geometry_tolerance: f64,
-    /// Kernel calls that (re)computed an influence matrix, with a geometry tolerance set.
-    pub mc_influence_updates: u64,
 
     cells: CellList,
     cand: Vec<(u32, u32)>,
@@ -360,8 +349,6 @@ pub struct World {
     mc_types: Vec<McType>,
     // multi-contact scratch (kept between steps: no allocation in the loop)
     slot_start: Vec<u32>,
-    slot_start_old: Vec<u32>,
-    slots_old: Vec<Slot>,
     slots: Vec<Slot>,
     slot_fill: Vec<u32>,
     loads: Vec<ContactLoad>,
@@ -372,8 +359,8 @@ pub struct World {
     slots_stale: bool,
     /// Per pair: contact points relative to i and to j for this step's multi-contact pass.
     pair_points: Vec<[Vec3; 2]>,
-    /// Geometry tolerance: per particle, its kept influence matrix.
-    mc_kept: Vec<KeptInfluence>,
+    /// Geometry tolerance: the kept influence matrices, one per particle.
+    mc_cache: Option<InfluenceCache>,
     pair_out: Vec<PairForce>,
     pair_mc: Vec<bool>,
     f_buf: Vec<Vec3>,
@@ -460,6 +447,12 @@ impl World {
             }
         }
         self.mc_types = self.materials.iter().map(|m| McType { material: *m }).collect();
+        let tol = self.mc_geometry_tolerance;
+        if tol == 0.0 {
+            self.mc_cache = None;
+        } else if self.mc_cache.as_ref().is_none_or(|c| c.tolerance() != tol) {
+            self.mc_cache = Some(InfluenceCache::new(tol).map_err(|e| e.to_string())?);
+        }
         self.need_build = true;
         self.neighbor_check().map_err(|e| e.to_string())?;
         // LIGGGHTS zeroes mesh node velocities at set-up (fix move/mesh sets them again in the
@@ -651,8 +644,6 @@ impl World {
             });
         }
         self.slots_stale = true;
-        // Pair indices change: kept influence matrices name slots by index.
-        self.mc_kept.iter_mut().for_each(|k| k.valid = false);
         self.x_build.clear();
         self.x_build.extend_from_slice(&self.p.x);
         self.le_offset_build = domain.le_offset;
@@ -718,8 +709,6 @@ impl World {
     /// contacts), as compressed rows. Rebuilt only when the pairs or wall contacts changed.
     fn build_slots(&mut self) {
         let n = self.p.len();
-        std::mem::swap(&mut self.slots, &mut self.slots_old);
-        std::mem::swap(&mut self.slot_start, &mut self.slot_start_old);
         self.slot_start.clear();
         self.slot_start.resize(n + 1, 0);
         for (pr, _) in self.pairs.iter().zip(&self.pair_mc).filter(|(_, m)| **m) {
@@ -751,18 +740,6 @@ impl World {
             let i = c.p as usize;
             self.slots[self.slot_fill[i] as usize] = Slot::Wall(k as u32);
             self.slot_fill[i] += 1;
-        }
-        // A kept influence matrix stays valid only for the same contact list (slots name pairs by
-        // index, which a neighbour build changes: that build voids them all).
-        if self.slot_start_old.len() == n + 1 {
-            for (i, kept) in self.mc_kept.iter_mut().enumerate().filter(|(_, k)| k.valid) {
-                let new = &self.slots[self.slot_start[i] as usize..self.slot_start[i + 1] as usize];
-                let old =
-                    &self.slots_old[self.slot_start_old[i] as usize..self.slot_start_old[i + 1] as usize];
-                kept.valid = new == old;
-            }
-        } else {
-            self.mc_kept.iter_mut().for_each(|k| k.valid = false);
         }
         self.slots_stale = false;
     }
@@ -856,28 +833,9 @@ impl World {
                 self.fb_buf.resize(nl, false);
             }
             let (dr, fb) = (&mut self.dr_buf[..nl], &mut self.fb_buf[..nl]);
-            let res = if self.mc_geometry_tolerance > 0.0 {
-                if self.mc_kept.len() != n {
-                    self.mc_kept.resize_with(n, Default::default);
-                }
-                let kept = &mut self.mc_kept[i];
-                let lim = (self.mc_geometry_tolerance * params.radius).powi(2);
-                // Kept while no point moved beyond the tolerance (a changed contact list voids it
-                // in `build_slots`).
-                let current = kept.valid
-                    && self.loads.iter().zip(&kept.points).all(|(l, q)| (l.point - q).norm_squared() <= lim);
-                let mut res = Ok(());
-                if !current {
-                    kept.g.resize(nl * nl, 0.0);
-                    res = influence(&params, &self.loads, &mut kept.g);
-                    kept.points.clear();
-                    kept.points.extend(self.loads.iter().map(|l| l.point));
-                    kept.valid = res.is_ok();
-                    self.mc_influence_updates += 1;
-                }
-                res.and_then(|_| radius_changes_with(&params, &kept.g, &self.loads, dr, fb))
-            } else {
-                radius_changes(&params, &self.loads, dr, fb)
+            let res = match self.mc_cache.as_mut() {
+                Some(cache) => cache.radius_changes(i, &params, &self.loads, dr, fb),
+                None => radius_changes(&params, &self.loads, dr, fb),
             };
             let summary = res.map_err(|e| StepError {
                 step: self.step,
@@ -1024,6 +982,11 @@ impl World {
             }
         }
         Ok(())
+    }
+
+    /// Kernel calls that (re)computed an influence matrix under the geometry tolerance.
+    pub fn mc_influence_updates(&self) -> u64 {
+        self.mc_cache.as_ref().map_or(0, |c| c.recomputed)
     }
 
     /// Translational kinetic energy ½ Σ m v² [J] (thermo `ke`).

@@ -312,6 +312,72 @@ pub fn radius_changes_with(
     })
 }
 
+/// Radius changes under a geometry tolerance: one kept [`influence`] matrix per caller-chosen slot
+/// (an engine's particle index), reused while the contact set has the same parameters, the same
+/// number of contacts and every point within `tolerance` × radius of the point the matrix was
+/// computed from, and recomputed otherwise. The matrix is a function of the points alone, so the
+/// test needs no contact identities: any bookkeeping that lists a particle's contacts in a stable
+/// order gets the reuse, and anything else only costs a recomputation. `tolerance` = 0 recomputes
+/// every call (the exact kernel, to round-off).
+#[derive(Debug, Default)]
+pub struct InfluenceCache {
+    tolerance: f64,
+    kept: Vec<Kept>,
+    /// Calls that (re)computed a matrix.
+    pub recomputed: u64,
+}
+
+#[derive(Debug, Default)]
+struct Kept {
+    params: Option<McParams>,
+    points: Vec<Vec3>,
+    g: Vec<f64>,
+}
+
+impl InfluenceCache {
+    /// `tolerance` as a fraction of the particle radius: finite and ≥ 0.
+    pub fn new(tolerance: f64) -> Result<Self, MaterialError> {
+        check("geometry tolerance", tolerance, "finite and >= 0 (a fraction of the particle radius)", |v| {
+            v >= 0.0
+        })?;
+        Ok(Self { tolerance, ..Default::default() })
+    }
+
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// [`radius_changes`] of the contact set kept in `slot`.
+    pub fn radius_changes(
+        &mut self,
+        slot: usize,
+        p: &McParams,
+        contacts: &[ContactLoad],
+        delta: &mut [f64],
+        hertz_fallback: &mut [bool],
+    ) -> Result<KernelSummary, KernelError> {
+        if self.kept.len() <= slot {
+            self.kept.resize_with(slot + 1, Default::default);
+        }
+        let k = &mut self.kept[slot];
+        let lim = (self.tolerance * p.radius).powi(2);
+        let current = k.params.as_ref() == Some(p)
+            && k.points.len() == contacts.len()
+            && contacts.iter().zip(&k.points).all(|(c, q)| (c.point - q).norm_squared() <= lim);
+        if !current {
+            let n = contacts.len();
+            k.g.resize(n * n, 0.0);
+            k.params = None;
+            influence(p, contacts, &mut k.g)?;
+            k.points.clear();
+            k.points.extend(contacts.iter().map(|c| c.point));
+            k.params = Some(*p);
+            self.recomputed += 1;
+        }
+        radius_changes_with(p, &k.g, contacts, delta, hertz_fallback)
+    }
+}
+
 /// Which per-term measure the peak tracks (a const parameter, so each variant compiles to its own
 /// loop): none for standard MC, |δ| or δ for the two `mprTest` readings of Eq. 3.
 const NO_CAP: u8 = 0;
