@@ -79,12 +79,23 @@ fn calibrate_one(
     let (hc, _) = uniaxial::compress(Law::HERTZ, nu, s, &data)?;
     let hertz_nrmse = uniaxial::error(&hc, &refc);
     let mut evals = 0;
+    // An unstable run (the engine's stop message names a step and a particle) counts as an
+    // infinite error; any other failure (a deck or file problem) ends the calibration, so that
+    // it cannot pass for a search result.
+    let mut failure: Option<String> = None;
     let mut eval = |gamma: f64, mpr: f64, e: f64| -> f64 {
         evals += 1;
+        if failure.is_some() {
+            return f64::INFINITY;
+        }
         let err =
             match uniaxial::compress(Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nu, s, &data) {
                 Ok((c, _)) => uniaxial::error(&c, &refc),
-                Err(_) => f64::INFINITY,
+                Err(m) if m.contains(": step ") && m.contains(": particle ") => f64::INFINITY,
+                Err(m) => {
+                    failure = Some(m);
+                    f64::INFINITY
+                }
             };
         say(&format!(
             "ν = {nu}: eval {evals}: γ = {gamma:.4} MPR = {mpr:.4} E = {e:.4e} Pa → NRMSE {:.3} %",
@@ -108,6 +119,9 @@ fn calibrate_one(
             e = ef * E_HYDROGEL;
             best = be;
         }
+    }
+    if let Some(m) = failure {
+        return Err(format!("ν = {nu}: a calibration run failed (not an instability): {m}"));
     }
     Ok(Fit {
         nu,
