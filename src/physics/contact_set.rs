@@ -154,32 +154,12 @@ pub fn radius_changes(
     delta: &mut [f64],
     hertz_fallback: &mut [bool],
 ) -> Result<KernelSummary, KernelError> {
+    let loaded = match prologue(p, contacts, delta, hertz_fallback, true)? {
+        Start::Done(summary) => return Ok(summary),
+        Start::Sum { loaded } => loaded,
+    };
     let n = contacts.len();
-    if delta.len() < n || hertz_fallback.len() < n {
-        return Err(KernelError::BufferTooShort {
-            contacts: n,
-            delta: delta.len(),
-            fallback: hertz_fallback.len(),
-        });
-    }
     let threshold = p.loaded_threshold();
-    let mut loaded = 0;
-    for (i, c) in contacts.iter().enumerate() {
-        if !(c.force.is_finite() && c.point.iter().all(|x| x.is_finite())) {
-            return Err(KernelError::NonFiniteInput { contact: i });
-        }
-        if c.force > threshold {
-            loaded += 1;
-        }
-    }
-    delta[..n].fill(0.0);
-    hertz_fallback[..n].fill(false);
-    // No loaded contact, a single contact, or γ = 0: no neighbour term for anybody. With exactly
-    // one loaded contact the others still receive its displacement (that is how a contact created
-    // by radius growth appears, as in LIGGGHTS), which costs one pass over the list.
-    if loaded == 0 || n < 2 || p.gamma == 0.0 {
-        return Ok(KernelSummary { loaded, fallbacks: 0 });
-    }
     let nu = p.poisson_ratio;
     let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
     SCRATCH.with(|s| {
@@ -193,6 +173,48 @@ pub fn radius_changes(
         let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak)?;
         Ok(KernelSummary { loaded, fallbacks })
     })
+}
+
+/// How a kernel call starts: with the answer already known, or with sums to do.
+enum Start {
+    Done(KernelSummary),
+    Sum { loaded: usize },
+}
+
+/// What every kernel entry point does first: buffer lengths, finite inputs (points too when
+/// `check_points`), the loaded count, zeroed outputs, and the early answer when no neighbour term
+/// exists (no loaded contact, a single contact, or γ = 0). With exactly one loaded contact the
+/// others still receive its displacement: that is how a contact created by radius growth appears,
+/// as in LIGGGHTS.
+fn prologue(
+    p: &McParams,
+    contacts: &[ContactLoad],
+    delta: &mut [f64],
+    hertz_fallback: &mut [bool],
+    check_points: bool,
+) -> Result<Start, KernelError> {
+    let n = contacts.len();
+    if delta.len() < n || hertz_fallback.len() < n {
+        return Err(KernelError::BufferTooShort {
+            contacts: n,
+            delta: delta.len(),
+            fallback: hertz_fallback.len(),
+        });
+    }
+    let threshold = p.loaded_threshold();
+    let mut loaded = 0;
+    for (i, c) in contacts.iter().enumerate() {
+        if !(c.force.is_finite() && (!check_points || c.point.iter().all(|x| x.is_finite()))) {
+            return Err(KernelError::NonFiniteInput { contact: i });
+        }
+        loaded += usize::from(c.force > threshold);
+    }
+    delta[..n].fill(0.0);
+    hertz_fallback[..n].fill(false);
+    if loaded == 0 || n < 2 || p.gamma == 0.0 {
+        return Ok(Start::Done(KernelSummary { loaded, fallbacks: 0 }));
+    }
+    Ok(Start::Sum { loaded })
 }
 
 /// Eq. 3 on the sums: a contact whose peak term trips the cap gets Δ = 0 and the Hertz flag (the
@@ -269,26 +291,19 @@ pub fn radius_changes_with(
     hertz_fallback: &mut [bool],
 ) -> Result<KernelSummary, KernelError> {
     let n = contacts.len();
-    if delta.len() < n || hertz_fallback.len() < n || g.len() < n * n {
+    if g.len() < n * n {
         return Err(KernelError::BufferTooShort {
             contacts: n,
             delta: delta.len(),
             fallback: hertz_fallback.len(),
         });
     }
+    // The points entered through `g`; only the forces are read here.
+    let loaded = match prologue(p, contacts, delta, hertz_fallback, false)? {
+        Start::Done(summary) => return Ok(summary),
+        Start::Sum { loaded } => loaded,
+    };
     let threshold = p.loaded_threshold();
-    let mut loaded = 0;
-    for (i, c) in contacts.iter().enumerate() {
-        if !c.force.is_finite() {
-            return Err(KernelError::NonFiniteInput { contact: i });
-        }
-        loaded += usize::from(c.force > threshold);
-    }
-    delta[..n].fill(0.0);
-    hertz_fallback[..n].fill(false);
-    if loaded == 0 || n < 2 || p.gamma == 0.0 {
-        return Ok(KernelSummary { loaded, fallbacks: 0 });
-    }
     SCRATCH.with(|s| {
         let s = &mut *s.borrow_mut();
         // Unloaded contacts exert nothing: their force enters as 0.
