@@ -63,6 +63,8 @@ fn calibration_rows() -> Vec<(f64, f64, f64, f64)> {
         })
         .collect()
 }
+/// Geometry tolerance of the extra advanced-MC run (fraction of the radius).
+const GEOMETRY_TOLERANCE: f64 = 1e-3;
 /// Standard-MC prefactors tried in increasing order; the highest that runs stable is used.
 const GAMMA_LADDER: [f64; 5] = [0.5, 0.75, 1.0, 1.25, 1.5];
 
@@ -136,17 +138,20 @@ pub struct Law {
     pub mpr: f64,
     /// The particles' Young's modulus [Pa] (the calibration's third parameter).
     pub youngs_modulus: f64,
+    /// `geometryTolerance` of `mc_advanced` (0: exact).
+    pub geometry_tolerance: f64,
 }
 
 impl Law {
-    pub const HERTZ: Law = Law { law: "1", gamma: 1.0, mpr: 0.0, youngs_modulus: E_HYDROGEL };
+    pub const HERTZ: Law =
+        Law { law: "1", gamma: 1.0, mpr: 0.0, youngs_modulus: E_HYDROGEL, geometry_tolerance: 0.0 };
 
     pub fn standard(gamma: f64) -> Self {
-        Law { law: "2", gamma, mpr: 0.0, youngs_modulus: E_HYDROGEL }
+        Law { law: "2", gamma, mpr: 0.0, ..Self::HERTZ }
     }
 
     pub fn advanced(gamma: f64, mpr: f64) -> Self {
-        Law { law: "0", gamma, mpr, youngs_modulus: E_HYDROGEL }
+        Law { law: "0", gamma, mpr, ..Self::HERTZ }
     }
 }
 
@@ -156,6 +161,7 @@ fn deck_vars(m: Law, nu: f64, s: &Setup, strokes: u32) -> Vec<(&'static str, Str
         ("law", m.law.to_string()),
         ("gamma", m.gamma.to_string()),
         ("mpr", m.mpr.to_string()),
+        ("geomtol", m.geometry_tolerance.to_string()),
         ("nu", nu.to_string()),
         ("stroke", s.stroke.to_string()),
         ("zend", Z_END.to_string()),
@@ -306,8 +312,9 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
          with the paper's App. B values γ = {GAMMA_ADVANCED}, MPR = {MPR_ADVANCED} (fitted on one and nine \
          particles at ν = 0.5), and, in the full mode, with the parameters `mcdem calibrate` fitted for this ν on \
          this case (`validation/reference/calibration_mcdem.csv`; E is fitted too where ν > 0.3, as in the \
-         paper). The ordering target uses the calibrated run where there is one.{}\n\n\
-         | ν | nonlocal [s] | Hertz NRMSE | standard MC γ_max | standard MC NRMSE | advanced MC (App. B) NRMSE | advanced MC calibrated: γ, MPR, E [Pa] | its NRMSE | advanced < standard < Hertz |\n|---|---|---|---|---|---|---|---|---|\n",
+         paper). The ordering target uses the calibrated run where there is one; that law also runs with \
+         `geometryTolerance {GEOMETRY_TOLERANCE:e}` (docs/dem.md), one more point in the speed-against-error plot.{}\n\n\
+         | ν | nonlocal [s] | Hertz NRMSE | standard MC γ_max | standard MC NRMSE | advanced MC (App. B) NRMSE | advanced MC calibrated: γ, MPR, E [Pa] | its NRMSE | same with geometryTolerance {GEOMETRY_TOLERANCE:e}: NRMSE, wall time / exact | advanced < standard < Hertz |\n|---|---|---|---|---|---|---|---|---|---|\n",
         (Z0 - Z_END) / (n as f64 * DT),
         kind.name(),
         s.nonlocal_steps,
@@ -363,26 +370,39 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             None => (None, f64::NAN, Curve::new()),
         };
         // An unstable advanced-MC run is a finding (reported, target missed), not a failed case.
-        let mut advanced = |m: Law, name: &str| -> (Curve, f64) {
-            let params = format!("nu={nu} gamma={} mpr={} E={}", m.gamma, m.mpr, m.youngs_modulus);
+        // Returns the curve, its NRMSE and the run's wall time.
+        let mut advanced = |m: Law, name: &str| -> (Curve, f64, f64) {
+            let mut params = format!("nu={nu} gamma={} mpr={} E={}", m.gamma, m.mpr, m.youngs_modulus);
+            if m.geometry_tolerance > 0.0 {
+                params += &format!(" geometryTolerance={}", m.geometry_tolerance);
+            }
             match compress(m, nu, &s, &data) {
                 Ok((c, run)) => {
                     let e = error(&c, &refc);
                     push_curve(rows, name, params, &c);
                     summary(models, format!("{name} nu={nu}"), e, &run);
-                    (c, e)
+                    (c, e, run.wall_time_s)
                 }
                 Err(e) => {
                     unstable.push(format!("ν = {nu}, {name} γ = {} MPR = {}: {e}", m.gamma, m.mpr));
-                    (Curve::new(), f64::NAN)
+                    (Curve::new(), f64::NAN, f64::NAN)
                 }
             }
         };
-        let (bc, be) = advanced(Law::advanced(GAMMA_ADVANCED, MPR_ADVANCED), "mc_advanced_app_b");
+        let (bc, be, _) = advanced(Law::advanced(GAMMA_ADVANCED, MPR_ADVANCED), "mc_advanced_app_b");
         let cal = if opts.quick { None } else { calibrated(nu) };
-        let (ac, ae) = match cal {
+        let (ac, ae, at) = match cal {
             Some(m) => advanced(m, "mc_advanced"),
-            None => (bc.clone(), be),
+            None => (bc.clone(), be, f64::NAN),
+        };
+        // The speed-against-error trade of the geometry tolerance (docs/dem.md) on the law of the
+        // ordering target: one more point per ν in the speed-against-error plot.
+        let (_, te, tt) = match cal {
+            Some(m) => advanced(
+                Law { geometry_tolerance: GEOMETRY_TOLERANCE, ..m },
+                &format!("mc_advanced_tol{GEOMETRY_TOLERANCE:e}"),
+            ),
+            None => (Curve::new(), f64::NAN, f64::NAN),
         };
         let ordered = ae < se && se < he;
         targets.push(Target {
@@ -393,7 +413,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         });
         let _ = writeln!(
             md,
-            "| {nu} | {ref_secs:.1} | {:.2} % | {} | {:.2} % | {:.2} % | {} | {} | {} |",
+            "| {nu} | {ref_secs:.1} | {:.2} % | {} | {:.2} % | {:.2} % | {} | {} | {} | {} |",
             100.0 * he,
             gamma_max.map(|g| g.to_string()).unwrap_or_else(|| "none stable".into()),
             100.0 * se,
@@ -403,6 +423,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
                 m.gamma, m.mpr, m.youngs_modulus
             )),
             if cal.is_some() { format!("{:.2} %", 100.0 * ae) } else { String::new() },
+            if cal.is_some() { format!("{:.2} %, {:.2}", 100.0 * te, tt / at) } else { String::new() },
             if ordered { "yes" } else { "NO" }
         );
         r.nrmse = (nu, he, se, ae);
