@@ -14,7 +14,7 @@ pub mod neighbor;
 
 use std::fmt;
 
-use crate::physics::contact_set::{radius_changes, ContactLoad, InfluenceCache, McParams};
+use crate::physics::contact_set::{loaded_threshold, radius_changes, ContactLoad, InfluenceCache, McParams};
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::{particle_particle, particle_wall, Body, ContactError, WallPoint};
 use crate::physics::{Material, PairCoeffs, Vec3};
@@ -289,7 +289,7 @@ struct McType {
 }
 
 /// Indirection from a particle to one of its contacts, for the multi-contact pass.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 enum Slot {
     PairI(u32),
     PairJ(u32),
@@ -333,7 +333,7 @@ pub struct World {
     /// default): Eq. 2 is evaluated from this step's contact points for every particle. > 0: each
     /// particle keeps its influence matrix (Eq. 2 without the forces) and recomputes it only when
     /// one of its contact points has moved more than this fraction of its radius since, or its
-    /// contact list changed: an approximation whose error `mcdem bench` reports next to its speed.
+    /// number of contacts changed: an approximation whose error `mcdem bench` reports next to its speed.
     pub mc_geometry_tolerance: f64,
 
     cells: CellList,
@@ -780,12 +780,7 @@ impl World {
         self.pair_points.resize(self.pairs.len(), [Vec3::zeros(); 2]);
         let (p, types) = (&self.p, &self.mc_types);
         // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
-        let eps = |a: usize| {
-            types[p.typ[a]].material.youngs_modulus
-                * p.radius[a]
-                * p.radius[a]
-                * crate::physics::contact_set::LOADED_FORCE_FACTOR
-        };
+        let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
         for ((pr, pts), _) in
             self.pairs.iter().zip(self.pair_points.iter_mut()).zip(&self.pair_mc).filter(|(_, m)| **m)
         {

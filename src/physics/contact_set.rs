@@ -20,6 +20,13 @@ use super::Vec3;
 /// contacts enter the sum (a contact that merely touches carries no load and deforms nothing).
 pub const LOADED_FORCE_FACTOR: f64 = 1e-14;
 
+/// Force [N] below which a contact of a particle with Young's modulus E [Pa] and radius r [m]
+/// counts as unloaded: E r² · [`LOADED_FORCE_FACTOR`]. Engines also switch the contact point on it.
+#[inline]
+pub fn loaded_threshold(youngs_modulus: f64, radius: f64) -> f64 {
+    youngs_modulus * radius * radius * LOADED_FORCE_FACTOR
+}
+
 /// The particle-side parameters of the kernel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct McParams {
@@ -61,10 +68,10 @@ impl McParams {
         Ok(())
     }
 
-    /// Force below which a contact counts as unloaded (see [`LOADED_FORCE_FACTOR`]).
+    /// Force below which a contact counts as unloaded (see [`loaded_threshold`]).
     #[inline]
     pub fn loaded_threshold(&self) -> f64 {
-        self.youngs_modulus * self.radius * self.radius * LOADED_FORCE_FACTOR
+        loaded_threshold(self.youngs_modulus, self.radius)
     }
 }
 
@@ -93,6 +100,8 @@ pub struct KernelSummary {
 pub enum KernelError {
     /// Output buffers shorter than the contact list.
     BufferTooShort { contacts: usize, delta: usize, fallback: usize },
+    /// An influence matrix with fewer than n² values.
+    MatrixTooShort { contacts: usize, len: usize },
     /// A contact point or force is not finite.
     NonFiniteInput { contact: usize },
     /// The sum overflowed (forces far outside any physical range).
@@ -105,6 +114,11 @@ impl fmt::Display for KernelError {
             KernelError::BufferTooShort { contacts, delta, fallback } => write!(
                 f,
                 "output buffers too short: {contacts} contacts, delta has {delta}, hertz_fallback has {fallback}"
+            ),
+            KernelError::MatrixTooShort { contacts, len } => write!(
+                f,
+                "influence matrix too short: {contacts} contacts need {} values, it has {len}",
+                contacts * contacts
             ),
             KernelError::NonFiniteInput { contact } => {
                 write!(f, "contact {contact}: point or force is not finite")
@@ -252,7 +266,7 @@ fn finish(
 pub fn influence(p: &McParams, contacts: &[ContactLoad], g: &mut [f64]) -> Result<(), KernelError> {
     let n = contacts.len();
     if g.len() < n * n {
-        return Err(KernelError::BufferTooShort { contacts: n, delta: g.len() / n.max(1), fallback: n });
+        return Err(KernelError::MatrixTooShort { contacts: n, len: g.len() });
     }
     if let Some(i) = contacts.iter().position(|c| !c.point.iter().all(|x| x.is_finite())) {
         return Err(KernelError::NonFiniteInput { contact: i });
@@ -292,11 +306,7 @@ pub fn radius_changes_with(
 ) -> Result<KernelSummary, KernelError> {
     let n = contacts.len();
     if g.len() < n * n {
-        return Err(KernelError::BufferTooShort {
-            contacts: n,
-            delta: delta.len(),
-            fallback: hertz_fallback.len(),
-        });
+        return Err(KernelError::MatrixTooShort { contacts: n, len: g.len() });
     }
     // The points entered through `g`; only the forces are read here.
     let loaded = match prologue(p, contacts, delta, hertz_fallback, false)? {
@@ -311,18 +321,13 @@ pub fn radius_changes_with(
         s.w.extend(contacts.iter().map(|c| if c.force > threshold { c.force } else { 0.0 }));
         s.peak.clear();
         s.peak.resize(n, 0.0);
-        let signed = matches!(p.cap, Some(Cap { test: MprTest::Signed, .. }));
-        // Source by source over all targets: contiguous, independent lanes (vectorised), and each
-        // target still sums its terms in increasing source index.
-        let (delta, peak) = (&mut delta[..n], &mut s.peak[..n]);
-        for (col, &fk) in g.chunks_exact(n).zip(&s.w) {
-            for ((dc, pc), &gk) in delta.iter_mut().zip(peak.iter_mut()).zip(col) {
-                let t = gk * fk;
-                *dc += t;
-                *pc = pc.max(if signed { t } else { t.abs() });
-            }
+        let (g, delta) = (&g[..n * n], &mut delta[..n]);
+        match p.cap.map(|c| c.test) {
+            None => s.apply::<NO_CAP>(g, delta),
+            Some(MprTest::Abs) => s.apply::<ABS_CAP>(g, delta),
+            Some(MprTest::Signed) => s.apply::<SIGNED_CAP>(g, delta),
         }
-        let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak)?;
+        let fallbacks = finish(p, delta, &mut hertz_fallback[..n], &s.peak)?;
         Ok(KernelSummary { loaded, fallbacks })
     })
 }
@@ -332,8 +337,8 @@ pub fn radius_changes_with(
 /// number of contacts and every point within `tolerance` × radius of the point the matrix was
 /// computed from, and recomputed otherwise. The matrix is a function of the points alone, so the
 /// test needs no contact identities: any bookkeeping that lists a particle's contacts in a stable
-/// order gets the reuse, and anything else only costs a recomputation. `tolerance` = 0 recomputes
-/// every call (the exact kernel, to round-off).
+/// order gets the reuse, and anything else only costs a recomputation. `tolerance` = 0 reuses a
+/// matrix only for identical points, i.e. it is the exact kernel to round-off.
 #[derive(Debug, Default)]
 pub struct InfluenceCache {
     tolerance: f64,
@@ -398,6 +403,16 @@ impl InfluenceCache {
 const NO_CAP: u8 = 0;
 const ABS_CAP: u8 = 1;
 const SIGNED_CAP: u8 = 2;
+
+/// A neighbour term in the measure the cap compares with δ_max.
+#[inline(always)]
+fn measure<const CAP: u8>(t: f64) -> f64 {
+    if CAP == SIGNED_CAP {
+        t
+    } else {
+        t.abs()
+    }
+}
 
 thread_local! {
     /// Working memory of the kernel, one per thread: grown to the largest contact set seen and
@@ -472,7 +487,6 @@ impl Scratch {
         let (px, py, pz) = (&self.px[..n], &self.py[..n], &self.pz[..n]);
         let (nx, ny, nz, w) = (&self.nx[..n], &self.ny[..n], &self.nz[..n], &self.w[..n]);
         let (peak, back) = (&mut self.peak[..n], &mut self.back[..n]);
-        let measure = |t: f64| if CAP == SIGNED_CAP { t } else { t.abs() };
         for a in 0..n {
             let (pa, na, wa) = ([px[a], py[a], pz[a]], [nx[a], ny[a], nz[a]], w[a]);
             for b in a + 1..n {
@@ -481,18 +495,36 @@ impl Scratch {
                 back[b] = g_ba * w[b];
                 delta[b] += t_ab;
                 if CAP != NO_CAP {
-                    peak[b] = peak[b].max(measure(t_ab));
+                    peak[b] = peak[b].max(measure::<CAP>(t_ab));
                 }
             }
             let (mut acc, mut pk) = (delta[a], peak[a]);
             for &t in &back[a + 1..n] {
                 acc += t;
                 if CAP != NO_CAP {
-                    pk = pk.max(measure(t));
+                    pk = pk.max(measure::<CAP>(t));
                 }
             }
             delta[a] = acc;
             peak[a] = pk;
+        }
+    }
+
+    /// Δ_c = Σ_k g[k·n + c] F_k with the forces in `w`, and the cap's peaks: source by source over
+    /// all targets (contiguous, independent lanes, vectorised); each target still sums its terms
+    /// in increasing source index.
+    #[inline(always)]
+    fn apply<const CAP: u8>(&mut self, g: &[f64], delta: &mut [f64]) {
+        let n = delta.len();
+        let peak = &mut self.peak[..n];
+        for (col, &fk) in g.chunks_exact(n).zip(&self.w) {
+            for ((dc, pc), &gk) in delta.iter_mut().zip(peak.iter_mut()).zip(col) {
+                let t = gk * fk;
+                *dc += t;
+                if CAP != NO_CAP {
+                    *pc = pc.max(measure::<CAP>(t));
+                }
+            }
         }
     }
 }

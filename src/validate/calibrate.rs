@@ -183,11 +183,12 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
     // with the same mode takes the ν it finds there instead of fitting them again.
     let journal =
         opts.out.join(if opts.quick { "calibration_done_quick.jsonl" } else { "calibration_done.jsonl" });
+    let same = |a: f64, b: f64| (a - b).abs() < 1e-12;
     let done: Vec<Fit> = std::fs::read_to_string(&journal)
         .unwrap_or_default()
         .lines()
         .filter_map(|l| serde_json::from_str::<Fit>(l).ok())
-        .filter(|f| s.nus.iter().any(|&nu| (nu - f.nu).abs() < 1e-12))
+        .filter(|f| s.nus.iter().any(|&nu| same(nu, f.nu)))
         .collect();
     for f in &done {
         say(&format!(
@@ -198,8 +199,7 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
             f.mpr
         ));
     }
-    let todo: Vec<f64> =
-        s.nus.iter().copied().filter(|nu| !done.iter().any(|f| (f.nu - nu).abs() < 1e-12)).collect();
+    let todo: Vec<f64> = s.nus.iter().copied().filter(|&nu| !done.iter().any(|f| same(f.nu, nu))).collect();
     let append = Mutex::new(());
     let fits: Vec<Result<Fit, String>> = todo
         .par_iter()

@@ -63,6 +63,7 @@ fn calibration_rows() -> Vec<(f64, f64, f64, f64)> {
         })
         .collect()
 }
+
 /// Geometry tolerance of the extra advanced-MC run (fraction of the radius).
 const GEOMETRY_TOLERANCE: f64 = 1e-3;
 /// Standard-MC prefactors tried in increasing order; the highest that runs stable is used.
