@@ -131,10 +131,10 @@ enum Study {
         /// Particles per run (default: 250 quick, 2000 full)
         #[arg(long)]
         n: Option<usize>,
-        /// Geometric prefactor γ of Eq. 2 for every ν (default 1.125)
+        /// Geometric prefactor γ of Eq. 2 for every ν (default: per ν from the recorded calibration)
         #[arg(long)]
         gamma: Option<f64>,
-        /// Maximum penetration ratio of Eq. 3 (default 0.08)
+        /// Maximum penetration ratio of Eq. 3 for every ν (default: per ν from the recorded calibration)
         #[arg(long)]
         mpr: Option<f64>,
         /// Runs side by side, one thread each (default 2)
@@ -157,12 +157,8 @@ fn study(s: Study) -> Result<(), String> {
             if let Some(n) = n {
                 g.n = n;
             }
-            if let Some(v) = gamma {
-                g.gamma_mc = v;
-            }
-            if let Some(v) = mpr {
-                g.mpr = v;
-            }
+            g.gamma_mc = gamma;
+            g.mpr = mpr;
             if no_cost {
                 g.cost_sizes.clear();
             }

@@ -36,9 +36,11 @@ fn ratio(rs: &[RunResult]) -> f64 {
 fn bagnold_below_jamming_rate_independent_above_resumable() {
     let dir = tempfile::tempdir().unwrap();
     let say = |l: &str| eprintln!("{l}");
-    // Below jamming (φ = 0.5, frictional): inertial regime, p̂ ∝ γ̂², so doubling γ̂ gives × 4.
+    // Below jamming (φ = 0.45, frictional): inertial regime, p̂ ∝ γ̂². At N = 128 and strain ≈ 2.5
+    // one run's p̂ scatters by about 20 %, so the rates are 4× apart and the test is on the
+    // exponent: ln(ratio)/ln 4 = 2 ± 0.4 (a quasi-static response would give 0).
     let below = Options {
-        grid: grid("below", 0.5, 0.5, [5e-3, 1e-2], 0.5),
+        grid: grid("below", 0.45, 0.5, [2.5e-3, 1e-2], 0.5),
         out: dir.path().join("below"),
         threads: 2,
         cost_only: false,
@@ -46,8 +48,9 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
     let s = run(&below, &say).unwrap();
     assert_eq!((s.ran, s.skipped), (2, 0));
     let r = ratio(&s.results);
-    eprintln!("below jamming: p̂ ratio at 2× γ̂ = {r:.3} (γ̂² gives 4)");
-    assert!((r / 4.0 - 1.0).abs() < 0.3, "p̂(2γ̂)/p̂(γ̂) = {r}");
+    let exponent = r.ln() / 4f64.ln();
+    eprintln!("below jamming: p̂ ratio at 4× γ̂ = {r:.3}, exponent {exponent:.2} (Bagnold: 2)");
+    assert!((exponent - 2.0).abs() < 0.4, "p̂ ∝ γ̂^{exponent}, ratio {r}");
     // Above jamming (φ = 0.75, frictionless): quasi-static, p̂ independent of γ̂ (× 3 here).
     let above = Options {
         grid: grid("above", 0.75, 0.0, [1e-3, 3e-3], 0.25),

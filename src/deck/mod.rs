@@ -232,6 +232,8 @@ impl Deck {
         world.skin = 0.0;
         world.pair_threads = opts.pair_threads;
         world.mc_geometry_tolerance = opts.mc_geometry_tolerance;
+        // LAMMPS sorts atoms spatially every 1000 steps unless `atom_modify sort` says otherwise.
+        world.sort_every = 1000;
         Ok(Deck {
             world,
             vars,
@@ -530,12 +532,26 @@ impl Deck {
                 }
             }
             "atom_modify" => {
-                // map array|hash and sort only change LIGGGHTS' memory layout.
+                // `map array|hash` only changes LIGGGHTS' memory layout; `sort Nfreq binsize`
+                // sets how often particles are reordered in space (0 = never; the bin size is
+                // the engine's own, half the neighbour cutoff).
                 let mut k = 1;
                 while k < a.len() {
                     match a[k] {
                         "map" => k += 2,
-                        "sort" => k += 3,
+                        "sort" => {
+                            let every = a.get(k + 1).ok_or("atom_modify sort: expected Nfreq binsize")?;
+                            let bin = a.get(k + 2).ok_or("atom_modify sort: expected Nfreq binsize")?;
+                            self.world.sort_every = every.parse::<u64>().map_err(|_| {
+                                format!("atom_modify sort: Nfreq '{every}' is not an integer >= 0")
+                            })?;
+                            if !bin.parse::<f64>().is_ok_and(|b| b >= 0.0) {
+                                return Err(format!(
+                                    "atom_modify sort: binsize '{bin}' is not a number >= 0"
+                                ));
+                            }
+                            k += 3;
+                        }
                         other => return Err(unsupported(&format!("atom_modify keyword {other}"))),
                     }
                 }

@@ -140,7 +140,13 @@ impl Dump {
             s.push_str(&format!("{} {}\n", format::g(d.lo[a], 6), format::g(d.hi[a], 6)));
         }
         s.push_str(&format!("ITEM: ATOMS {} \n", self.names.join(" ")));
-        for i in 0..w.p.len() {
+        // Rows in id order (LIGGGHTS `dump_modify sort id`), whatever the engine's spatial
+        // sorting did to the particle order, so frames of one run line up row by row.
+        let mut order: Vec<usize> = (0..w.p.len()).collect();
+        if !w.p.id.is_sorted() {
+            order.sort_unstable_by_key(|&i| w.p.id[i]);
+        }
+        for i in order {
             match &self.format {
                 Some(pieces) => {
                     let mut k = 0;

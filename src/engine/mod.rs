@@ -95,8 +95,9 @@ impl Domain {
     }
 }
 
-/// Per-particle state, struct of arrays. Indices are stable for the whole run (no reordering),
-/// so the contact history, keyed by particle ids, can be kept sorted by index.
+/// Per-particle state, struct of arrays. Indices change only when [`World::sort_every`] asks for
+/// spatial sorting (then at neighbour builds); everything keyed by index is remapped with them,
+/// and ids never change.
 #[derive(Debug, Clone, Default)]
 pub struct Particles {
     pub id: Vec<i64>,
@@ -151,6 +152,29 @@ impl Particles {
     }
 }
 
+impl Particles {
+    /// Reorders every array: the particle at old index `old_of_new[k]` moves to index k.
+    fn permute(&mut self, old_of_new: &[u32]) {
+        fn gather<T: Copy>(v: &mut Vec<T>, old_of_new: &[u32]) {
+            // One fresh array per field and sort: sorts are rare (every `sort_every` steps at a
+            // neighbour build), so this stays out of the step loop's cost.
+            let out: Vec<T> = old_of_new.iter().map(|&o| v[o as usize]).collect();
+            *v = out;
+        }
+        gather(&mut self.id, old_of_new);
+        gather(&mut self.typ, old_of_new);
+        gather(&mut self.x, old_of_new);
+        gather(&mut self.v, old_of_new);
+        gather(&mut self.omega, old_of_new);
+        gather(&mut self.f, old_of_new);
+        gather(&mut self.torque, old_of_new);
+        gather(&mut self.radius, old_of_new);
+        gather(&mut self.mass, old_of_new);
+        gather(&mut self.density, old_of_new);
+        gather(&mut self.image, old_of_new);
+    }
+}
+
 fn sphere_mass(r: f64, density: f64) -> f64 {
     if r == 0.0 {
         density
@@ -200,6 +224,14 @@ struct Pair {
     /// Centres closer than (1 + RECEIVER_GAP)(r_i + r_j) at the last evaluation: the pair may
     /// receive multi-contact terms (growth could make it touch). True for a new pair.
     near: bool,
+}
+
+/// A pair's contact as the multi-contact kernel sees it: the contact points relative to i and to
+/// j, and the previous step's normal force.
+#[derive(Debug, Clone, Copy, Default)]
+struct PairLoad {
+    points: [Vec3; 2],
+    force: f64,
 }
 
 /// One touching particle pair as output sees it (indices into the particle arrays).
@@ -313,7 +345,8 @@ pub struct World {
     pub walls: Vec<WallFix>,
     pub meshes: Vec<Mesh>,
     pub skin: f64,
-    /// Multi-contact range factor for the neighbour cutoff (radius growth, SPEC §2).
+    /// Multi-contact range factor: wall contacts are sought out to this multiple of the radius;
+    /// pair lists out to it as well, but never beyond what a pair can use ([`World::pair_reach`]).
     pub mc_range: f64,
     /// Is each particle integrated (`fix nve/sphere` present)?
     pub integrate: bool,
@@ -335,6 +368,15 @@ pub struct World {
     /// one of its contact points has moved more than this fraction of its radius since, or its
     /// number of contacts changed: an approximation whose error `mcdem bench` reports next to its speed.
     pub mc_geometry_tolerance: f64,
+    /// Spatial sorting (LAMMPS `atom_modify sort`): at the first neighbour build at least this
+    /// many steps after the last sort, particles are reordered along a Morton curve of cells, so
+    /// that particles close in space are close in memory and the pair loop stays in cache as N
+    /// grows. 0 (the default of the library API, which keeps indices stable): never. Decks get
+    /// LAMMPS' 1000.
+    pub sort_every: u64,
+    /// Number of spatial sorts so far.
+    pub sorts: u64,
+    next_sort: u64,
 
     cells: CellList,
     cand: Vec<(u32, u32)>,
@@ -344,8 +386,10 @@ pub struct World {
     wc_old: Vec<WallContact>,
     x_build: Vec<Vec3>,
     need_build: bool,
-    /// Lees–Edwards offset at the last neighbour build.
-    le_offset_build: f64,
+    /// Lees–Edwards offset travelled since the last neighbour build (not wrapped) [m].
+    le_travel: f64,
+    /// Interaction cutoff without skin, 2 r_max × pair_reach, at the last build [m].
+    cut_build: f64,
     mc_types: Vec<McType>,
     // multi-contact scratch (kept between steps: no allocation in the loop)
     slot_start: Vec<u32>,
@@ -357,8 +401,8 @@ pub struct World {
     /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
     /// contact appeared or left, a pair entered or left the multi-contact set).
     slots_stale: bool,
-    /// Per pair: contact points relative to i and to j for this step's multi-contact pass.
-    pair_points: Vec<[Vec3; 2]>,
+    /// Per pair: what this step's multi-contact pass reads (filled for pairs taking part).
+    pair_loads: Vec<PairLoad>,
     /// Geometry tolerance: the kept influence matrices, one per particle.
     mc_cache: Option<InfluenceCache>,
     pair_out: Vec<PairForce>,
@@ -440,7 +484,7 @@ impl World {
         let rmax = self.p.radius.iter().copied().fold(0.0, f64::max);
         for a in 0..3 {
             let l = domain.hi[a] - domain.lo[a];
-            if domain.periodic[a] && l < 2.0 * (2.0 * rmax * self.mc_range + self.skin) {
+            if domain.periodic[a] && l < 2.0 * (2.0 * rmax * self.pair_reach() + self.skin) {
                 return Err(format!(
                     "periodic box length {l:e} m along axis {a} is shorter than twice the neighbour cutoff"
                 ));
@@ -474,6 +518,7 @@ impl World {
         }
         if let Some(d) = self.domain.as_mut() {
             d.advance_shear(dt);
+            self.le_travel += d.le_vjump * dt;
         }
         for m in &mut self.meshes {
             if m.velocity != Vec3::zeros() {
@@ -550,22 +595,41 @@ impl World {
         Ok(())
     }
 
-    /// Rebuilds the neighbour list when a particle moved more than skin/2 (or on request).
+    /// Rebuilds the neighbour list when a pair could have closed the skin since the last build
+    /// (or on request). Without shear that is LAMMPS' test, some particle moved more than skin/2.
+    /// Under Lees–Edwards shear each particle's displacement is split into the affine streaming
+    /// part at its build position, γ (y_build − y_mid) x̂ for the strain γ since the build, and
+    /// the rest (the fluctuation, largest m). Two particles that can touch now are less than the
+    /// cutoff r_c + 2m apart in y, so their separation changed by at most 2m + γ (r_c + 2m); the
+    /// image across the sheared boundary moves with the offset, which cancels the streaming jump
+    /// there. Rebuilding when that bound reaches the skin keeps the list complete, and the
+    /// interval no longer shrinks with the box size: the lab displacement of particles near the
+    /// boundary grows with L_y, the relative motion of neighbours does not.
     fn neighbor_check(&mut self) -> Result<(), StepError> {
-        // Pairs across the sheared boundary also move apart by the change of the Lees–Edwards
-        // offset since the build; it eats into the skin like a displacement of both particles.
-        let lx_le = self.domain.map_or(1.0, |d| d.hi.x - d.lo.x);
-        let doff = self.domain.map_or(0.0, |d| {
-            let o = (d.le_offset - self.le_offset_build).rem_euclid(lx_le);
-            o.min(lx_le - o)
-        });
-        let half = 0.5 * (self.skin - doff);
-        if half <= 0.0 {
-            self.need_build = true;
-        }
         if !self.need_build {
-            let lim = half * half;
-            let moved = self.p.x.iter().zip(&self.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim);
+            let Some(domain) = self.domain else { return Ok(()) };
+            let ly = domain.hi.y - domain.lo.y;
+            let strain =
+                if domain.le_vjump != 0.0 || self.le_travel != 0.0 { self.le_travel / ly } else { 0.0 };
+            let moved = if strain == 0.0 {
+                let lim = 0.25 * self.skin * self.skin;
+                self.p.x.iter().zip(&self.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim)
+            } else {
+                let ymid = 0.5 * (domain.lo.y + domain.hi.y);
+                let m2 = self
+                    .p
+                    .x
+                    .iter()
+                    .zip(&self.x_build)
+                    .map(|(x, x0)| {
+                        let mut d = x - x0;
+                        d.x -= strain * (x0.y - ymid);
+                        d.norm_squared()
+                    })
+                    .fold(0.0, f64::max);
+                let m = m2.sqrt();
+                2.0 * m + strain.abs() * (self.cut_build + 2.0 * m) > self.skin
+            };
             if !moved {
                 return Ok(());
             }
@@ -614,7 +678,11 @@ impl World {
                 }
             }
         }
-        self.cells.build(&domain, &self.p.x, &self.p.radius, self.skin, self.mc_range, &mut self.cand);
+        if self.sort_every > 0 && self.step >= self.next_sort {
+            self.sort_spatially(&domain);
+            self.next_sort = self.step + self.sort_every;
+        }
+        self.cells.build(&domain, &self.p.x, &self.p.radius, self.skin, self.pair_reach(), &mut self.cand);
         // Carry the history over: both lists are sorted by (i, j).
         std::mem::swap(&mut self.pairs, &mut self.pairs_old);
         self.pairs.clear();
@@ -646,8 +714,85 @@ impl World {
         self.slots_stale = true;
         self.x_build.clear();
         self.x_build.extend_from_slice(&self.p.x);
-        self.le_offset_build = domain.le_offset;
+        self.le_travel = 0.0;
+        self.cut_build = 2.0 * self.p.radius.iter().copied().fold(0.0, f64::max) * self.pair_reach();
         Ok(())
+    }
+
+    /// Reorders the particles along a Morton (Z-order) curve of cells half a neighbour cutoff wide
+    /// and remaps everything keyed by particle index: pair history (a pair whose indices change
+    /// order is turned round), wall contacts and kept influence matrices. Positions must be
+    /// inside the box (called after the periodic wrap). The physics is unchanged; only summation
+    /// orders, hence round-off, differ from an unsorted run.
+    fn sort_spatially(&mut self, domain: &Domain) {
+        let n = self.p.len();
+        if n < 2 {
+            return;
+        }
+        let rmax = self.p.radius.iter().copied().fold(0.0_f64, f64::max);
+        let bin = 0.5 * (2.0 * rmax * self.pair_reach() + self.skin);
+        let len = domain.hi - domain.lo;
+        // 21 bits per axis fit a 63-bit key; coarser bins only for absurdly large boxes.
+        let bins = |a: usize| ((len[a] / bin).ceil().clamp(1.0, (1u64 << 21) as f64)) as u64;
+        let nb = [bins(0), bins(1), bins(2)];
+        let mut keys: Vec<(u64, u32)> = (0..n)
+            .map(|i| {
+                let x = self.p.x[i];
+                let mut code = 0u64;
+                for a in 0..3 {
+                    let s = ((x[a] - domain.lo[a]) / len[a]).clamp(0.0, 1.0);
+                    let b = ((s * nb[a] as f64) as u64).min(nb[a] - 1);
+                    code |= spread_bits(b) << a;
+                }
+                (code, i as u32)
+            })
+            .collect();
+        keys.sort_unstable();
+        if keys.iter().enumerate().all(|(k, &(_, o))| k == o as usize) {
+            return;
+        }
+        let old_of_new: Vec<u32> = keys.iter().map(|&(_, o)| o).collect();
+        let mut new_of_old = vec![0u32; n];
+        for (k, &o) in old_of_new.iter().enumerate() {
+            new_of_old[o as usize] = k as u32;
+        }
+        self.p.permute(&old_of_new);
+        for pr in &mut self.pairs {
+            let (a, b) = (new_of_old[pr.i as usize], new_of_old[pr.j as usize]);
+            if a < b {
+                (pr.i, pr.j) = (a, b);
+            } else {
+                // The same contact seen from the other particle: the history is i's tangential
+                // displacement relative to j, so it changes sign; the radii trade places.
+                (pr.i, pr.j) = (b, a);
+                pr.shear = -pr.shear;
+                std::mem::swap(&mut pr.ri_prev, &mut pr.rj_prev);
+                std::mem::swap(&mut pr.dri, &mut pr.drj);
+                pr.force = -pr.force;
+                pr.torque = Vec3::zeros();
+            }
+        }
+        self.pairs.sort_unstable_by_key(|pr| (pr.i, pr.j));
+        for c in &mut self.wc {
+            c.p = new_of_old[c.p as usize];
+        }
+        self.wc.sort_unstable_by_key(|c| c.key());
+        if let Some(cache) = self.mc_cache.as_mut() {
+            cache.reorder(&old_of_new);
+        }
+        self.slots_stale = true;
+        self.sorts += 1;
+    }
+
+    /// Centre distance, as a multiple of r_i + r_j, out to which a pair can matter: touching
+    /// (Hertz), or receiving multi-contact radius changes (within RECEIVER_GAP; a pair further
+    /// apart gets none and cannot touch). The neighbour list needs no more, whatever `mc_range`
+    /// asks for: wider lists only cost memory traffic.
+    fn pair_reach(&self) -> f64 {
+        match self.closure {
+            Some(Closure::MultiContact) => self.mc_range.min(1.0 + RECEIVER_GAP),
+            _ => 1.0,
+        }
     }
 
     /// Finds the wall elements each particle is close to and carries their history over.
@@ -749,51 +894,55 @@ impl World {
     fn multicontact(&mut self) -> Result<(), StepError> {
         let n = self.p.len();
         let domain = self.domain.expect("domain checked in setup");
-        for pr in &mut self.pairs {
-            pr.dri = 0.0;
-            pr.drj = 0.0;
-        }
         for c in &mut self.wc {
             c.dr = 0.0;
         }
-        // A pair takes part if loaded, or close enough that radius growth could make it touch
-        // (gap below RECEIVER_GAP of the radii at the last evaluation; a pair moves far less than
-        // that in a step): far candidates would only cost kernel time.
         if self.pair_mc.len() != self.pairs.len() {
             self.pair_mc.clear();
             self.pair_mc.resize(self.pairs.len(), false);
             self.slots_stale = true;
         }
-        for (m, pr) in self.pair_mc.iter_mut().zip(&self.pairs) {
-            let now = pr.fn_prev > 0.0 || pr.near;
-            if *m != now {
-                *m = now;
-                self.slots_stale = true;
-            }
-        }
-        if self.slots_stale {
-            self.build_slots();
-        }
-        // Contact points once per pair, both sides from one centre distance. As LIGGGHTS: the
-        // midpoint of the modified spheres' surfaces along the centre line when loaded, else
-        // each particle's own surface point.
-        self.pair_points.resize(self.pairs.len(), [Vec3::zeros(); 2]);
+        self.pair_loads.resize(self.pairs.len(), PairLoad::default());
         let (p, types) = (&self.p, &self.mc_types);
         // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
         let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
-        for ((pr, pts), _) in
-            self.pairs.iter().zip(self.pair_points.iter_mut()).zip(&self.pair_mc).filter(|(_, m)| **m)
+        // One pass over the pairs (at large N they no longer fit in cache): reset the radius
+        // changes, decide who takes part, and give the kernel each taking part pair's contact
+        // points and previous force in a compact array, so its gather does not touch the pairs.
+        // A pair takes part if loaded, or close enough that radius growth could make it touch
+        // (gap below RECEIVER_GAP of the radii at the last evaluation; a pair moves far less than
+        // that in a step): far candidates would only cost kernel time. Contact points once per
+        // pair, both sides from one centre distance; as LIGGGHTS: the midpoint of the modified
+        // spheres' surfaces along the centre line when loaded, else each particle's own surface
+        // point.
+        let mut stale = false;
+        for ((pr, m), load) in
+            self.pairs.iter_mut().zip(self.pair_mc.iter_mut()).zip(self.pair_loads.iter_mut())
         {
+            pr.dri = 0.0;
+            pr.drj = 0.0;
+            let now = pr.fn_prev > 0.0 || pr.near;
+            if *m != now {
+                *m = now;
+                stale = true;
+            }
+            if !now {
+                continue;
+            }
             let (a, b) = (pr.i as usize, pr.j as usize);
             let mut xab = p.x[b] - p.x[a];
             domain.minimum_image(&mut xab);
             let len = xab.norm().max(1e-300);
-            *pts = if pr.fn_prev > eps(a) {
+            load.points = if pr.fn_prev > eps(a) {
                 let tmp = xab * ((pr.ri_prev - pr.rj_prev) * 0.5 / len);
                 [tmp + 0.5 * xab, tmp - 0.5 * xab]
             } else {
                 [xab * (pr.ri_prev / len), -xab * (pr.rj_prev / len)]
             };
+            load.force = pr.fn_prev;
+        }
+        if stale || self.slots_stale {
+            self.build_slots();
         }
         for i in 0..n {
             let (s0, s1) = (self.slot_start[i] as usize, self.slot_start[i + 1] as usize);
@@ -803,8 +952,14 @@ impl World {
             self.loads.clear();
             for s in &self.slots[s0..s1] {
                 let (point, force) = match *s {
-                    Slot::PairI(k) => (self.pair_points[k as usize][0], self.pairs[k as usize].fn_prev),
-                    Slot::PairJ(k) => (self.pair_points[k as usize][1], self.pairs[k as usize].fn_prev),
+                    Slot::PairI(k) => {
+                        let l = &self.pair_loads[k as usize];
+                        (l.points[0], l.force)
+                    }
+                    Slot::PairJ(k) => {
+                        let l = &self.pair_loads[k as usize];
+                        (l.points[1], l.force)
+                    }
                     Slot::Wall(k) => {
                         let c = &self.wc[k as usize];
                         (c.rel_prev, c.fn_prev)
@@ -1143,7 +1298,8 @@ impl World {
 }
 
 /// Relative gap (fraction of r_i + r_j) within which an unloaded pair still receives a
-/// multi-contact radius change: growth beyond 5 % of both radii is outside the model's range.
+/// multi-contact radius change: growth beyond 10 % of both radii together is outside the
+/// model's range (Eq. 3 caps each neighbour term at MPR r, about 0.1 r).
 const RECEIVER_GAP: f64 = 0.1;
 
 /// Steps between two serial-vs-threads timing probes, and the length of each probe window.
@@ -1229,6 +1385,17 @@ impl PairCtx<'_> {
         }
         Ok(out)
     }
+}
+
+/// The bits of `v` (up to 21) spread to every third bit: one axis of a 3-D Morton code.
+fn spread_bits(v: u64) -> u64 {
+    let mut x = v & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f_0000_0000_ffff;
+    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    x = (x | x << 2) & 0x1249_2492_4924_9249;
+    x
 }
 
 /// s += u ⊗ w.

@@ -367,6 +367,17 @@ impl InfluenceCache {
         self.tolerance
     }
 
+    /// Follows a renumbering of the slots: the matrix kept in slot `old_of_new[k]` moves to slot k
+    /// (slots beyond `old_of_new` are dropped). Validity is still checked by the points, so a
+    /// slot whose contacts come in a different order afterwards is simply recomputed.
+    pub fn reorder(&mut self, old_of_new: &[u32]) {
+        let mut old = std::mem::take(&mut self.kept);
+        self.kept = old_of_new
+            .iter()
+            .map(|&o| old.get_mut(o as usize).map(std::mem::take).unwrap_or_default())
+            .collect();
+    }
+
     /// [`radius_changes`] of the contact set kept in `slot`.
     pub fn radius_changes(
         &mut self,

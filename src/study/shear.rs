@@ -27,6 +27,7 @@ use crate::physics::ghods2022::MprTest;
 use crate::physics::hertz::Tangential;
 use crate::physics::{Material, Vec3};
 use crate::validate::plot::{self, Chart, Series};
+use crate::validate::uniaxial::calibrated;
 
 /// Particle diameter [m] (the paper's App. B hydrogel spheres). Results are dimensionless, so d
 /// only sets the units.
@@ -37,11 +38,6 @@ pub const YOUNGS_MODULUS: f64 = 23.3e3;
 pub const DENSITY: f64 = 11.5;
 /// Coefficient of restitution (Chialvo et al. 2012, whose set-up the paper follows).
 pub const RESTITUTION: f64 = 0.7;
-/// Default geometric prefactor γ of Eq. 2, every ν (the LIGGGHTS hydrogel example's value).
-pub const GAMMA_MC: f64 = 1.125;
-/// Default maximum penetration ratio of Eq. 3, every ν (the hydrogel example; the paper's
-/// calibrations range 0.07–0.09).
-pub const MPR: f64 = 0.08;
 /// Overlap, as a fraction of d, at which the Hertz contact time that sets the step is evaluated.
 pub const DT_OVERLAP: f64 = 0.1;
 /// Steps per Hertz contact time.
@@ -262,6 +258,11 @@ fn random_positions(n: usize, l: f64, d: f64, rng: &mut Rng) -> Result<Vec<Vec3>
 
 /// A World at φ (after the affine compression), not yet sheared.
 fn prepare(spec: &RunSpec, compress_steps: u64) -> Result<(World, f64), String> {
+    prepare_sorted(spec, compress_steps, true)
+}
+
+/// [`prepare`], with or without spatial sorting (the cost measurement times both).
+fn prepare_sorted(spec: &RunSpec, compress_steps: u64, sort: bool) -> Result<(World, f64), String> {
     let d = DIAMETER;
     let vs = spec.n as f64 * std::f64::consts::PI / 6.0 * d.powi(3);
     let l = (vs / spec.phi).cbrt();
@@ -271,6 +272,8 @@ fn prepare(spec: &RunSpec, compress_steps: u64) -> Result<(World, f64), String> 
     let xs = random_positions(spec.n, l0, d, &mut rng)?;
     let mut w = World::new();
     w.domain = Some(Domain::new(Vec3::zeros(), Vec3::repeat(l0), [true; 3]));
+    // Spatial sorting as in a deck (LAMMPS' default period): keeps the pair loop in cache at large N.
+    w.sort_every = if sort { 1000 } else { 0 };
     let m = Material::new(YOUNGS_MODULUS, spec.nu, spec.gamma_mc, Some((spec.mpr, MprTest::Abs)))
         .map_err(|e| e.to_string())?;
     w.set_materials(vec![m], &[spec.restitution], &[spec.mu], Tangential::History)?;
@@ -474,8 +477,11 @@ pub struct Grid {
     pub nus: Vec<f64>,
     pub gamma_hats: Vec<f64>,
     pub n: usize,
-    pub gamma_mc: f64,
-    pub mpr: f64,
+    /// γ of Eq. 2 for every ν; None (the default): each ν's value from the recorded calibration
+    /// (`validation/reference/calibration_mcdem.csv`, the paper's Fig. 5 procedure).
+    pub gamma_mc: Option<f64>,
+    /// MPR of Eq. 3 for every ν; None: from the recorded calibration, as γ.
+    pub mpr: Option<f64>,
     pub restitution: f64,
     pub protocol: Protocol,
     /// Cost-vs-N measurement: sizes and shear steps timed per size (empty: none).
@@ -493,8 +499,8 @@ impl Grid {
             nus: vec![0.25, 0.5],
             gamma_hats: vec![1e-3, 4e-3],
             n: 250,
-            gamma_mc: GAMMA_MC,
-            mpr: MPR,
+            gamma_mc: None,
+            mpr: None,
             restitution: RESTITUTION,
             protocol: Protocol::quick(),
             cost_sizes: vec![250, 500, 1000, 2000],
@@ -511,8 +517,8 @@ impl Grid {
             nus: vec![0.25, 0.3, 0.35, 0.4, 0.45, 0.5],
             gamma_hats: vec![1e-3, 3e-3, 1e-2],
             n: 2000,
-            gamma_mc: GAMMA_MC,
-            mpr: MPR,
+            gamma_mc: None,
+            mpr: None,
             restitution: RESTITUTION,
             protocol: Protocol::full(),
             cost_sizes: vec![500, 2000, 8000, 20000],
@@ -520,10 +526,22 @@ impl Grid {
         }
     }
 
-    pub fn specs(&self) -> Vec<RunSpec> {
+    /// (γ, MPR) of the advanced MC law at ν: the explicit values, else the recorded calibration's.
+    pub fn law(&self, nu: f64) -> Result<(f64, f64), String> {
+        let cal = calibrated(nu);
+        let pick = |given: Option<f64>, from_cal: Option<f64>, what: &str| {
+            given.or(from_cal).ok_or_else(|| {
+                format!("no recorded calibration for nu = {nu} to take {what} from: give it with --{what}")
+            })
+        };
+        Ok((pick(self.gamma_mc, cal.map(|l| l.gamma), "gamma")?, pick(self.mpr, cal.map(|l| l.mpr), "mpr")?))
+    }
+
+    pub fn specs(&self) -> Result<Vec<RunSpec>, String> {
         let mut v = Vec::new();
         for &mu in &self.mus {
             for &nu in &self.nus {
+                let (gamma_mc, mpr) = self.law(nu)?;
                 for &phi in &self.phis {
                     for &gamma_hat in &self.gamma_hats {
                         v.push(RunSpec {
@@ -532,8 +550,8 @@ impl Grid {
                             nu,
                             gamma_hat,
                             n: self.n,
-                            gamma_mc: self.gamma_mc,
-                            mpr: self.mpr,
+                            gamma_mc,
+                            mpr,
                             restitution: self.restitution,
                             seed: 1,
                         });
@@ -541,7 +559,7 @@ impl Grid {
                 }
             }
         }
-        v
+        Ok(v)
     }
 }
 
@@ -618,6 +636,9 @@ pub struct CostRow {
     pub seconds: f64,
     pub particle_steps_per_s: f64,
     pub seconds_per_step: f64,
+    /// The same run with spatial sorting off (particles in creation order), timed right after:
+    /// what the sorting buys at this N.
+    pub unsorted_seconds_per_step: f64,
     pub phi: f64,
     pub mu: f64,
     pub nu: f64,
@@ -639,11 +660,32 @@ fn single_thread<T: Send>(f: impl FnOnce() -> T + Send) -> Result<T, String> {
     Ok(pool.install(f))
 }
 
+/// How the report states the law's (γ, MPR): given values, or the calibration's per ν.
+fn law_text(g: &Grid) -> String {
+    let per_nu: Vec<String> = g
+        .nus
+        .iter()
+        .filter_map(|&nu| g.law(nu).ok().map(|(ga, m)| format!("ν = {nu}: γ = {ga}, MPR = {m}")))
+        .collect();
+    match (g.gamma_mc, g.mpr) {
+        (Some(ga), Some(m)) => format!("γ = {ga}, MPR = {m} at every ν"),
+        _ => format!(
+            "γ and MPR per ν{} — {}",
+            if g.gamma_mc.is_some() || g.mpr.is_some() {
+                " (one of them given, the other calibrated)"
+            } else {
+                " from the recorded calibration (validation/reference/calibration_mcdem.csv)"
+            },
+            per_nu.join("; ")
+        ),
+    }
+}
+
 /// Runs (or resumes) the study and writes every output into `opts.out`.
 pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, String> {
     let runs_dir = opts.out.join("runs");
     std::fs::create_dir_all(&runs_dir).map_err(|e| format!("cannot create {}: {e}", runs_dir.display()))?;
-    let specs = opts.grid.specs();
+    let specs = opts.grid.specs()?;
     let proto = &opts.grid.protocol;
     let mut done: Vec<RunResult> = Vec::new();
     let mut todo: Vec<RunSpec> = Vec::new();
@@ -769,6 +811,7 @@ fn cost_rows(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Vec<CostRow>
     let dir = opts.out.join("cost");
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let (phi, mu, nu, gamma_hat) = (0.7, 0.5, 0.5, 1e-3);
+    let (gamma_mc, mpr) = g.law(nu)?;
     let mut rows = Vec::new();
     for &n in &g.cost_sizes {
         let path = dir.join(format!("n{n}_steps{}.json", g.cost_steps));
@@ -776,34 +819,41 @@ fn cost_rows(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Vec<CostRow>
             rows.push(r);
             continue;
         }
-        let spec = RunSpec {
-            phi,
-            mu,
-            nu,
-            gamma_hat,
-            n,
-            gamma_mc: g.gamma_mc,
-            mpr: g.mpr,
-            restitution: g.restitution,
-            seed: 7,
-        };
+        let spec = RunSpec { phi, mu, nu, gamma_hat, n, gamma_mc, mpr, restitution: g.restitution, seed: 7 };
         let row = single_thread(|| -> Result<CostRow, String> {
-            let (mut w, l) = prepare(&spec, 1000)?;
-            start_shear(&mut w, gamma_hat / time_unit(nu), l);
-            for _ in 0..20 {
-                w.step().map_err(|e| e.to_string())?;
+            // Both worlds side by side, timed in alternating chunks so that a slow spell of a
+            // shared machine hits both; at least 2e6 particle-steps each, so small N is timed
+            // over more than a few milliseconds.
+            let steps = g.cost_steps.max(2_000_000 / n as u64);
+            let mut worlds = Vec::new();
+            for sort in [true, false] {
+                let (mut w, l) = prepare_sorted(&spec, 1000, sort)?;
+                start_shear(&mut w, gamma_hat / time_unit(nu), l);
+                for _ in 0..20 {
+                    w.step().map_err(|e| e.to_string())?;
+                }
+                worlds.push(w);
             }
-            let t0 = Instant::now();
-            for _ in 0..g.cost_steps {
-                w.step().map_err(|e| e.to_string())?;
+            const CHUNKS: u64 = 5;
+            let mut secs_of = [0.0; 2];
+            for c in 0..CHUNKS {
+                let todo = steps * (c + 1) / CHUNKS - steps * c / CHUNKS;
+                for (w, t) in worlds.iter_mut().zip(secs_of.iter_mut()) {
+                    let t0 = Instant::now();
+                    for _ in 0..todo {
+                        w.step().map_err(|e| e.to_string())?;
+                    }
+                    *t += t0.elapsed().as_secs_f64();
+                }
             }
-            let secs = t0.elapsed().as_secs_f64();
+            let [secs, unsorted] = secs_of;
             Ok(CostRow {
+                unsorted_seconds_per_step: unsorted / steps as f64,
                 n,
-                steps: g.cost_steps,
+                steps,
                 seconds: secs,
-                particle_steps_per_s: (n as u64 * g.cost_steps) as f64 / secs,
-                seconds_per_step: secs / g.cost_steps as f64,
+                particle_steps_per_s: (n as u64 * steps) as f64 / secs,
+                seconds_per_step: secs / steps as f64,
                 phi,
                 mu,
                 nu,
@@ -811,8 +861,8 @@ fn cost_rows(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Vec<CostRow>
             })
         })??;
         say(&format!(
-            "cost N = {n}: {:.3e} particle-steps/s ({:.3e} s per step)",
-            row.particle_steps_per_s, row.seconds_per_step
+            "cost N = {n}: {:.3e} particle-steps/s ({:.3e} s per step; {:.3e} without spatial sorting)",
+            row.particle_steps_per_s, row.seconds_per_step, row.unsorted_seconds_per_step
         ));
         write_atomic(&path, &serde_json::to_string_pretty(&row).map_err(|e| e.to_string())?)?;
         rows.push(row);
@@ -1006,12 +1056,13 @@ fn write_outputs(
         );
     }
     w("response_surface.csv", &rs)?;
-    let mut cs = String::from("n,steps,seconds,particle_steps_per_s,seconds_per_step\n");
+    let mut cs =
+        String::from("n,steps,seconds,particle_steps_per_s,seconds_per_step,unsorted_seconds_per_step\n");
     for c in cost {
         let _ = writeln!(
             cs,
-            "{},{},{},{},{}",
-            c.n, c.steps, c.seconds, c.particle_steps_per_s, c.seconds_per_step
+            "{},{},{},{},{},{}",
+            c.n, c.steps, c.seconds, c.particle_steps_per_s, c.seconds_per_step, c.unsorted_seconds_per_step
         );
     }
     if !cost.is_empty() {
@@ -1174,6 +1225,12 @@ fn plots(
                 series: vec![
                     Series { label: "measured".into(), points: per, markers: true, thin: false },
                     Series {
+                        label: "without spatial sorting".into(),
+                        points: cost.iter().map(|c| (c.n as f64, c.unsorted_seconds_per_step)).collect(),
+                        markers: true,
+                        thin: true,
+                    },
+                    Series {
                         label: "∝ N from the smallest N".into(),
                         points: linear,
                         markers: false,
@@ -1201,15 +1258,14 @@ fn report(
     let _ = writeln!(s, "# Simple shear study ({} grid)\n", g.name);
     let _ = writeln!(
         s,
-        "Advanced MC (γ = {}, MPR = {}, abs test), E = {} Pa, ρ = {} kg/m³, d = {} m, e = {}, N = {}. \
+        "Advanced MC ({}, abs test), E = {} Pa, ρ = {} kg/m³, d = {} m, e = {}, N = {}. \
          k_n = 2E/(3(1−ν²)), p̂ = p/k_n, γ̂ = γ̇ d/√(k_n/ρ). Step = Hertz contact time at δ = {} d / {}. \
          MC fallback share: of the contacts the multi-contact kernel saw (particles with two or more contacts), \
          the share whose correction the Eq. 3 cap switched off. \
          Start: random sequential addition at φ = {}, affine compression to φ in {} steps, then Lees–Edwards shear. \
          Windows of strain {}; steady when the mean p of the last {} windows differs from that of the {} before by ≤ {} % \
          (not before strain {}; give up at {} and average the last windows); the last block and {} more windows are averaged.\n",
-        g.gamma_mc,
-        g.mpr,
+        law_text(g),
         YOUNGS_MODULUS,
         DENSITY,
         DIAMETER,
@@ -1309,22 +1365,32 @@ fn report(
     if !cost.is_empty() {
         let _ = writeln!(
             s,
-            "\n## Cost vs N\n\nφ = {}, μ = {}, ν = {}, γ̂ = {:e}, one thread, {} shear steps timed after a short compression.\n",
-            cost[0].phi, cost[0].mu, cost[0].nu, cost[0].gamma_hat, cost[0].steps
+            "\n## Cost vs N\n\nφ = {}, μ = {}, ν = {}, γ̂ = {:e}, one thread, after a short compression. Per N, the run \
+             with spatial sorting (the default) and the same run without it are timed side by side in five \
+             alternating chunks, {}–{} shear steps each (at least 2·10⁶ particle-steps).\n",
+            cost[0].phi,
+            cost[0].mu,
+            cost[0].nu,
+            cost[0].gamma_hat,
+            cost.iter().map(|c| c.steps).min().unwrap_or(0),
+            cost.iter().map(|c| c.steps).max().unwrap_or(0)
         );
         let _ = writeln!(
             s,
-            "| N | s per step | particle-steps/s | per-particle cost / smallest N |\n|---|---|---|---|"
+            "| N | s per step | particle-steps/s | per-particle cost / smallest N | without spatial sorting: s per step | its per-particle cost / smallest N |\n|---|---|---|---|---|---|"
         );
         let base = cost[0].seconds_per_step / cost[0].n as f64;
+        let base_u = cost[0].unsorted_seconds_per_step / cost[0].n as f64;
         for c in cost {
             let _ = writeln!(
                 s,
-                "| {} | {:.3e} | {:.3e} | {:.2} |",
+                "| {} | {:.3e} | {:.3e} | {:.2} | {:.3e} | {:.2} |",
                 c.n,
                 c.seconds_per_step,
                 c.particle_steps_per_s,
-                c.seconds_per_step / c.n as f64 / base
+                c.seconds_per_step / c.n as f64 / base,
+                c.unsorted_seconds_per_step,
+                c.unsorted_seconds_per_step / c.n as f64 / base_u
             );
         }
     }
