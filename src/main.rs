@@ -168,7 +168,8 @@ fn study(s: Study) -> Result<(), String> {
             for (mu, (pc, lo)) in &sum.phi_c {
                 println!("mu {mu}: phi_c {pc:.4} (searched from {lo})");
             }
-            for r in &sum.surface {
+            // A (μ, ν) without quasi-static points has no fit (all of them in a cost-only call).
+            for r in sum.surface.iter().filter(|r| r.points > 0) {
                 println!(
                     "mu {} nu {}: alpha {:.4} (paper {:.4}) beta {:.4} (paper {:.4}) from {} points",
                     r.mu, r.nu, r.alpha, r.alpha_paper, r.beta, r.beta_paper, r.points

@@ -51,9 +51,11 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
     let exponent = r.ln() / 4f64.ln();
     eprintln!("below jamming: p̂ ratio at 4× γ̂ = {r:.3}, exponent {exponent:.2} (Bagnold: 2)");
     assert!((exponent - 2.0).abs() < 0.4, "p̂ ∝ γ̂^{exponent}, ratio {r}");
-    // Above jamming (φ = 0.75, frictionless): quasi-static, p̂ independent of γ̂ (× 3 here).
+    // Above jamming (φ = 0.75, frictional): quasi-static, p̂ independent of γ̂ (× 3 here). The
+    // frictional packing is the clean case: at μ = 0.5 p̂ changes by less than 3 % over × 4 in γ̂ from
+    // φ = 0.65 up at N = 1000 (docs/shear.md), while frictionless packings keep a weak rate dependence.
     let above = Options {
-        grid: grid("above", 0.75, 0.0, [1e-3, 3e-3], 0.25),
+        grid: grid("above", 0.75, 0.5, [1e-3, 3e-3], 0.25),
         out: dir.path().join("above"),
         threads: 2,
         cost_only: false,
@@ -61,7 +63,7 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
     let s = run(&above, &say).unwrap();
     let r = ratio(&s.results);
     eprintln!("above jamming: p̂ ratio at 3× γ̂ = {r:.3}");
-    assert!((r - 1.0).abs() < 0.3, "p̂(3γ̂)/p̂(γ̂) = {r}");
+    assert!((r - 1.0).abs() < 0.15, "p̂(3γ̂)/p̂(γ̂) = {r}");
     for x in &s.results {
         assert!(x.z > 5.0 && x.p_hat_contact > 100.0 * x.p_hat_kinetic, "jammed: Z {} p̂ {:?}", x.z, x);
     }

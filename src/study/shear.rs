@@ -1038,7 +1038,10 @@ fn write_outputs(
             r.particle_steps_per_s
         );
     }
-    w("runs.csv", &csv)?;
+    // Run tables only when there are runs (a cost-only call before any grid run has none).
+    if !results.is_empty() {
+        w("runs.csv", &csv)?;
+    }
     let mut rs = String::from("mu,nu,phi_c,alpha,beta,alpha_paper,beta_paper,points,rms_log\n");
     for r in surface {
         let _ = writeln!(
@@ -1055,7 +1058,9 @@ fn write_outputs(
             f(r.rms_log)
         );
     }
-    w("response_surface.csv", &rs)?;
+    if !results.is_empty() {
+        w("response_surface.csv", &rs)?;
+    }
     let mut cs =
         String::from("n,steps,seconds,particle_steps_per_s,seconds_per_step,unsorted_seconds_per_step\n");
     for c in cost {
@@ -1176,8 +1181,10 @@ fn plots(
             Chart { title: &title, x_label: "φ", y_label: "p / k_n", log_x: false, log_y: true, series },
         )?;
     }
-    // Fig. 12 style: α and β vs ν, ours (markers) and the paper's (lines).
-    for (name, which) in [("alpha", 0usize), ("beta", 1usize)] {
+    // Fig. 12 style: α and β vs ν, ours (markers) and the paper's (lines); nothing to show before
+    // any grid run finished (a cost-only call).
+    let fitted = !results.is_empty();
+    for (name, which) in [("alpha", 0usize), ("beta", 1usize)].into_iter().filter(|_| fitted) {
         let mut series = Vec::new();
         for &mu in &g.mus {
             let ours: Vec<(f64, f64)> = surface
@@ -1223,7 +1230,12 @@ fn plots(
                 log_x: true,
                 log_y: true,
                 series: vec![
-                    Series { label: "measured".into(), points: per, markers: true, thin: false },
+                    Series {
+                        label: "with spatial sorting (default)".into(),
+                        points: per,
+                        markers: true,
+                        thin: false,
+                    },
                     Series {
                         label: "without spatial sorting".into(),
                         points: cost.iter().map(|c| (c.n as f64, c.unsorted_seconds_per_step)).collect(),
@@ -1292,74 +1304,78 @@ fn report(
         results.iter().filter(|r| r.steady).count(),
         total_wall
     );
-    let _ = writeln!(s, "## Response surface (Eq. 8, quasi-static points above jamming)\n");
-    let _ = writeln!(
-        s,
-        "A (μ, ν, φ) point is quasi-static when p̂ grows slower than γ̂^0.5 between the two slowest rates \
-         (one rate only: p̂/γ̂² > 10³); its slowest-rate p̂ enters the fit. φ_c is shared by all ν of one μ.\n"
-    );
-    let _ = writeln!(
-        s,
-        "φ_c is searched between the densest clearly inertial φ of that μ (p̂ ∝ γ̂^s with s ≥ 1.5; 0.5 if none) \
-         and the loosest quasi-static φ.\n"
-    );
-    let _ = writeln!(s, "| μ | fitted φ_c | search from |\n|---|---|---|");
-    for (mu, (pc, lo)) in phi_c {
-        let _ = writeln!(s, "| {mu} | {pc:.4} | {lo} |");
-    }
-    let _ = writeln!(
-        s,
-        "\n| μ | ν | points | α | α paper | Δα | β | β paper | Δβ | rms log residual |\n|---|---|---|---|---|---|---|---|---|---|"
-    );
-    for r in surface {
+    if results.is_empty() && failed.is_empty() {
+        let _ = writeln!(s, "No grid run has finished here yet (a cost-only call): no response surface.");
+    } else {
+        let _ = writeln!(s, "## Response surface (Eq. 8, quasi-static points above jamming)\n");
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.4} | {:.4} | {} | {:.4} | {:.4} | {} | {:.3} |",
-            r.mu,
-            r.nu,
-            r.points,
-            r.alpha,
-            r.alpha_paper,
-            rel(r.alpha, r.alpha_paper),
-            r.beta,
-            r.beta_paper,
-            rel(r.beta, r.beta_paper),
-            r.rms_log
+            "A (μ, ν, φ) point is quasi-static when p̂ grows slower than γ̂^0.5 between the two slowest rates \
+             (one rate only: p̂/γ̂² > 10³); its slowest-rate p̂ enters the fit. φ_c is shared by all ν of one μ.\n"
         );
-    }
-    let _ = writeln!(s, "\n## Runs\n");
-    let _ = writeln!(
-        s,
-        "| μ | ν | φ | γ̂ | p̂ | contact p̂ | kinetic p̂ | Z | −σ̂_xy | μ_eff | MC fallback share | steady at strain | averaged strain | rel. err | wall s | particle-steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-    );
-    for r in results {
-        let q = &r.spec;
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1e} | {:.3e} | {:.3e} | {:.2e} | {:.2} | {:.2e} | {:.3} | {:.3} | {} | {:.2}–{:.2} | {:.2} | {:.1} | {:.2e} |",
-            q.mu,
-            q.nu,
-            q.phi,
-            q.gamma_hat,
-            r.p_hat,
-            r.p_hat_contact,
-            r.p_hat_kinetic,
-            r.z,
-            r.shear_stress_hat,
-            r.mu_eff,
-            r.mc_fallback_share,
-            if r.steady { format!("{:.2}", r.strain_steady) } else { "not steady".into() },
-            r.strain_avg_from,
-            r.strain_avg_to,
-            r.p_hat_rel_err,
-            r.wall_s,
-            r.particle_steps_per_s
+            "φ_c is searched between the densest clearly inertial φ of that μ (p̂ ∝ γ̂^s with s ≥ 1.5; 0.5 if none) \
+             and the loosest quasi-static φ.\n"
         );
-    }
-    if !failed.is_empty() {
-        let _ = writeln!(s, "\n## Runs that stopped\n\n| run | cause |\n|---|---|");
-        for (k, e) in failed {
-            let _ = writeln!(s, "| {k} | {} |", e.replace('|', "/"));
+        let _ = writeln!(s, "| μ | fitted φ_c | search from |\n|---|---|---|");
+        for (mu, (pc, lo)) in phi_c {
+            let _ = writeln!(s, "| {mu} | {pc:.4} | {lo} |");
+        }
+        let _ = writeln!(
+            s,
+            "\n| μ | ν | points | α | α paper | Δα | β | β paper | Δβ | rms log residual |\n|---|---|---|---|---|---|---|---|---|---|"
+        );
+        for r in surface {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.4} | {:.4} | {} | {:.4} | {:.4} | {} | {:.3} |",
+                r.mu,
+                r.nu,
+                r.points,
+                r.alpha,
+                r.alpha_paper,
+                rel(r.alpha, r.alpha_paper),
+                r.beta,
+                r.beta_paper,
+                rel(r.beta, r.beta_paper),
+                r.rms_log
+            );
+        }
+        let _ = writeln!(s, "\n## Runs\n");
+        let _ = writeln!(
+            s,
+            "| μ | ν | φ | γ̂ | p̂ | contact p̂ | kinetic p̂ | Z | −σ̂_xy | μ_eff | MC fallback share | steady at strain | averaged strain | rel. err | wall s | particle-steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        );
+        for r in results {
+            let q = &r.spec;
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.1e} | {:.3e} | {:.3e} | {:.2e} | {:.2} | {:.2e} | {:.3} | {:.3} | {} | {:.2}–{:.2} | {:.2} | {:.1} | {:.2e} |",
+                q.mu,
+                q.nu,
+                q.phi,
+                q.gamma_hat,
+                r.p_hat,
+                r.p_hat_contact,
+                r.p_hat_kinetic,
+                r.z,
+                r.shear_stress_hat,
+                r.mu_eff,
+                r.mc_fallback_share,
+                if r.steady { format!("{:.2}", r.strain_steady) } else { "not steady".into() },
+                r.strain_avg_from,
+                r.strain_avg_to,
+                r.p_hat_rel_err,
+                r.wall_s,
+                r.particle_steps_per_s
+            );
+        }
+        if !failed.is_empty() {
+            let _ = writeln!(s, "\n## Runs that stopped\n\n| run | cause |\n|---|---|");
+            for (k, e) in failed {
+                let _ = writeln!(s, "| {k} | {} |", e.replace('|', "/"));
+            }
         }
     }
     if !cost.is_empty() {
@@ -1367,7 +1383,7 @@ fn report(
             s,
             "\n## Cost vs N\n\nφ = {}, μ = {}, ν = {}, γ̂ = {:e}, one thread, after a short compression. Per N, the run \
              with spatial sorting (the default) and the same run without it are timed side by side in five \
-             alternating chunks, {}–{} shear steps each (at least 2·10⁶ particle-steps).\n",
+             alternating chunks, {}–{} shear steps in all (at least 2·10⁶ particle-steps).\n",
             cost[0].phi,
             cost[0].mu,
             cost[0].nu,
