@@ -163,13 +163,13 @@ fn body(b: &mcdem_body) -> Body {
 fn coeffs(c: &mcdem_pair_coeffs) -> PairCoeffs {
     // The C ABI's pair functions are the history model (the plugin leaves the tangential
     // sub-model to LIGGGHTS).
-    PairCoeffs {
-        e_star: c.e_star,
-        g_star: c.g_star,
-        beta: c.beta,
-        friction: c.friction,
-        tangential: crate::physics::hertz::Tangential::History,
-    }
+    PairCoeffs::from_moduli(
+        c.e_star,
+        c.g_star,
+        c.beta,
+        c.friction,
+        crate::physics::hertz::Tangential::History,
+    )
 }
 
 fn write_contact(out: &mut mcdem_contact_force, r: Option<ContactForce>) {

@@ -405,7 +405,7 @@ pub struct World {
     pair_loads: Vec<PairLoad>,
     /// Geometry tolerance: the kept influence matrices, one per particle.
     mc_cache: Option<InfluenceCache>,
-    pair_out: Vec<PairForce>,
+    pair_out: Vec<PairOut>,
     pair_mc: Vec<bool>,
     f_buf: Vec<Vec3>,
     t_buf: Vec<Vec3>,
@@ -1045,20 +1045,21 @@ impl World {
             use rayon::prelude::*;
             // Every entry is overwritten below: only the length has to match (no per-step fill).
             if self.pair_out.len() != self.pairs.len() {
-                self.pair_out.resize(self.pairs.len(), None);
+                self.pair_out.resize(self.pairs.len(), PairOut::default());
             }
             self.pairs
                 .par_iter_mut()
                 .zip(self.pair_out.par_iter_mut())
                 .with_min_len(256)
-                .try_for_each(|(pr, out)| ctx.eval(pr).map(|r| *out = r))?;
-            for (pr, out) in self.pairs.iter().zip(&self.pair_out) {
-                if let Some((fi, ti, tj)) = out {
+                .try_for_each(|(pr, out)| ctx.eval(pr, out))
+                .map_err(|e| *e)?;
+            for (pr, o) in self.pairs.iter().zip(&self.pair_out) {
+                if o.touching {
                     let (i, j) = (pr.i as usize, pr.j as usize);
-                    self.p.f[i] += fi;
-                    self.p.f[j] -= fi;
-                    self.p.torque[i] += ti;
-                    self.p.torque[j] += tj;
+                    self.p.f[i] += o.force;
+                    self.p.f[j] -= o.force;
+                    self.p.torque[i] += o.torque_i;
+                    self.p.torque[j] += o.torque_j;
                 }
             }
         } else {
@@ -1068,13 +1069,15 @@ impl World {
             f.resize(n, Vec3::zeros());
             torque.clear();
             torque.resize(n, Vec3::zeros());
+            let mut o = PairOut::default();
             for pr in self.pairs.iter_mut() {
-                if let Some((fi, ti, tj)) = ctx.eval(pr)? {
+                ctx.eval(pr, &mut o).map_err(|e| *e)?;
+                if o.touching {
                     let (i, j) = (pr.i as usize, pr.j as usize);
-                    f[i] += fi;
-                    f[j] -= fi;
-                    torque[i] += ti;
-                    torque[j] += tj;
+                    f[i] += o.force;
+                    f[j] -= o.force;
+                    torque[i] += o.torque_i;
+                    torque[j] += o.torque_j;
                 }
             }
             std::mem::swap(&mut self.p.f, &mut self.f_buf);
@@ -1231,8 +1234,9 @@ impl World {
             step: self.step,
             liggghts_radii: self.liggghts_radii,
         };
+        let mut o = PairOut::default();
         for pr in self.pairs.iter_mut() {
-            ctx.eval(pr)?;
+            ctx.eval(pr, &mut o).map_err(|e| *e)?;
         }
         Ok(())
     }
@@ -1321,13 +1325,22 @@ struct PairCtx<'a> {
     liggghts_radii: bool,
 }
 
-type PairForce = Option<(Vec3, Vec3, Vec3)>;
+/// One pair's contribution: force on i, torques on i and j, when touching. Written in place by
+/// [`PairCtx::eval`] (a returned tuple travels through memory on every pair, and reading it back
+/// stalled the serial loop).
+#[derive(Debug, Clone, Copy, Default)]
+struct PairOut {
+    touching: bool,
+    force: Vec3,
+    torque_i: Vec3,
+    torque_j: Vec3,
+}
 
 impl PairCtx<'_> {
     /// Force on i, torques on i and j of one pair (None when not touching); updates the pair's
     /// history when `update`.
     #[inline]
-    fn eval(&self, pr: &mut Pair) -> Result<PairForce, StepError> {
+    fn eval(&self, pr: &mut Pair, out: &mut PairOut) -> Result<(), Box<StepError>> {
         let p = self.p;
         let (i, j) = (pr.i as usize, pr.j as usize);
         let mut d = p.x[i] - p.x[j];
@@ -1347,7 +1360,8 @@ impl PairCtx<'_> {
                 pr.ri_prev = ri;
                 pr.rj_prev = rj;
             }
-            return Ok(None);
+            out.touching = false;
+            return Ok(());
         }
         let bi = Body { x: p.x[i], v: p.v[i], omega: p.omega[i], radius: p.radius[i], mass: p.mass[i] };
         // The image of j across a sheared boundary carries the Lees–Edwards velocity jump.
@@ -1370,20 +1384,31 @@ impl PairCtx<'_> {
         let c = &self.coeffs[p.typ[i] * self.nt + p.typ[j]];
         let mut shear = pr.shear;
         let r = particle_particle(c, &bi, &bj, dri, pr.drj, self.dt, &mut shear)
-            .map_err(|e| contact_error(self.step, p.id[i], Some(p.id[j]), e))?;
-        let (out, fnorm) = match r {
-            Some(cf) => (Some((cf.force_i, cf.torque_i, cf.torque_j)), cf.force_i.dot(&cf.en).abs()),
-            None => (None, 0.0),
+            .map_err(|e| Box::new(contact_error(self.step, p.id[i], Some(p.id[j]), e)))?;
+        let fnorm = match r {
+            Some(cf) => {
+                *out = PairOut {
+                    touching: true,
+                    force: cf.force_i,
+                    torque_i: cf.torque_i,
+                    torque_j: cf.torque_j,
+                };
+                cf.force_i.dot(&cf.en).abs()
+            }
+            None => {
+                *out = PairOut::default();
+                0.0
+            }
         };
-        pr.force = out.map_or(Vec3::zeros(), |o| o.0);
-        pr.torque = out.map_or(Vec3::zeros(), |o| o.1);
+        pr.force = out.force;
+        pr.torque = out.torque_i;
         if self.update {
             pr.shear = shear;
             pr.fn_prev = fnorm;
             pr.ri_prev = ri_stored;
             pr.rj_prev = rj;
         }
-        Ok(out)
+        Ok(())
     }
 }
 

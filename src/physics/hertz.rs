@@ -40,6 +40,15 @@ pub fn effective_radius(ri: f64, rj: Option<f64>) -> f64 {
     }
 }
 
+/// Both effective quantities of a particle pair, R* = r_i r_j/(r_i + r_j) and m* = m_i m_j/(m_i + m_j),
+/// from one division (the pair loop's hot path has few enough that one more shows).
+#[inline(always)]
+pub fn effective_radius_and_mass(ri: f64, rj: f64, mi: f64, mj: f64) -> (f64, f64) {
+    let (rs, ms) = (ri + rj, mi + mj);
+    let inv = 1.0 / (rs * ms);
+    (ri * rj * ms * inv, mi * mj * rs * inv)
+}
+
 /// Effective mass m_eff = m_i m_j / (m_i + m_j); for a wall pass `None` and get m_i.
 #[inline]
 pub fn effective_mass(mi: f64, mj: Option<f64>) -> f64 {
@@ -64,7 +73,8 @@ pub fn normal(c: &PairCoeffs, delta: f64, reff: f64, meff: f64, vn: f64) -> Norm
     let st = 8.0 * c.g_star * sqrtval;
     let kn = 4.0 / 3.0 * c.e_star * sqrtval;
     let gamma_n = -2.0 * SQRT_FIVE_SIXTHS * c.beta * (sn * meff).sqrt();
-    let gamma_t = -2.0 * SQRT_FIVE_SIXTHS * c.beta * (st * meff).sqrt();
+    // −2√(5/6) β √(S_t m*) = γ_n √(S_t/S_n), and S_t/S_n = 4G*/E* is fixed per material pair.
+    let gamma_t = gamma_n * c.damping_ratio_t_n;
     let elastic = kn * delta;
     NormalForce { force: elastic - gamma_n * vn, elastic, kn, kt: st, gamma_n, gamma_t }
 }

@@ -104,6 +104,10 @@ pub struct PairCoeffs {
     pub friction: f64,
     /// Tangential sub-model (history unless the deck asks for `no_history`).
     pub tangential: Tangential,
+    /// γ_t / γ_n = √(S_t / S_n) = √(4 G* / E*): a property of the pair of materials, so the
+    /// tangential damping costs a product per contact instead of a square root. Derived: build
+    /// with [`PairCoeffs::new`] or [`PairCoeffs::from_moduli`].
+    pub damping_ratio_t_n: f64,
 }
 
 impl PairCoeffs {
@@ -120,6 +124,11 @@ impl PairCoeffs {
         let g_star = 1.0 / (2.0 * (2.0 - ni) * (1.0 + ni) / ei + 2.0 * (2.0 - nj) * (1.0 + nj) / ej);
         let ln_e = e.ln();
         let beta = ln_e / (ln_e * ln_e + std::f64::consts::PI * std::f64::consts::PI).sqrt();
-        Ok(Self { e_star, g_star, beta, friction: mu, tangential: Tangential::History })
+        Ok(Self::from_moduli(e_star, g_star, beta, mu, Tangential::History))
+    }
+
+    /// From the effective moduli directly (the C ABI passes them); fills the derived ratio.
+    pub fn from_moduli(e_star: f64, g_star: f64, beta: f64, friction: f64, tangential: Tangential) -> Self {
+        Self { e_star, g_star, beta, friction, tangential, damping_ratio_t_n: (4.0 * g_star / e_star).sqrt() }
     }
 }

@@ -162,6 +162,7 @@ pub fn particle_particle(
     let en = d * (1.0 / r);
     let cri = ri - 0.5 * overlap;
     let crj = rj - 0.5 * overlap;
+    let (reff, meff) = hertz::effective_radius_and_mass(ri, rj, bi.mass, bj.mass);
     let g = Geometry {
         en,
         overlap,
@@ -170,8 +171,8 @@ pub fn particle_particle(
         w: cri * bi.omega + crj * bj.omega,
         cri,
         crj,
-        reff: hertz::effective_radius(ri, Some(rj)),
-        meff: hertz::effective_mass(bi.mass, Some(bj.mass)),
+        reff,
+        meff,
     };
     forces(c, &g, dt, shear).map(Some)
 }
