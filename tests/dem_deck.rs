@@ -144,3 +144,30 @@ fn die_decks_of_the_plugin_run_in_the_engine() {
     let expected = 4.0 / 3.0 * e_star * 1e-3f64.sqrt() * (rows[29][1] / 2.0).powf(1.5);
     assert!((fz[29] - expected).abs() < 2e-3 * expected, "{} vs {expected}", fz[29]);
 }
+
+/// The library entry point keeps an engine stop apart from a broken deck: parameter searches
+/// (`mcdem calibrate`, the standard-MC γ ladder of `validate uniaxial`) score the first as an
+/// unstable law and abort on the second.
+#[test]
+fn deck_failures_say_whether_the_engine_stopped() {
+    use mcdem::deck::{run_file_checked, Options};
+    let dir = tempfile::tempdir().unwrap();
+    let opts = Options { log: Some("none".into()), progress: false, quiet: true, ..Default::default() };
+    // Two spheres driven into each other at 200 m/s: the overlap passes a radius within a step.
+    let crash = format!(
+        "{BASE}create_atoms 1 single 0.0015 0 0 units box\nset atom 2 diameter 0.002 density 1000\n\
+         set atom 1 vx 100\nset atom 2 vx -100\nrun 100\n"
+    );
+    let deck = dir.path().join("in.crash");
+    std::fs::write(&deck, crash).unwrap();
+    let e = run_file_checked(&deck, &opts).unwrap_err();
+    let stop = e.instability.clone().expect("an engine stop");
+    assert!(stop.particle == 1 || stop.particle == 2, "{e}");
+    assert!(stop.cause.contains("overlap"), "{e}");
+    // A deck error is not an engine stop, and names file and line.
+    let broken = dir.path().join("in.broken");
+    std::fs::write(&broken, format!("{BASE}frobnicate all\nrun 10\n")).unwrap();
+    let e = run_file_checked(&broken, &opts).unwrap_err();
+    assert!(e.instability.is_none(), "{e}");
+    assert!(e.message.contains("in.broken:") && e.message.contains("frobnicate"), "{e}");
+}

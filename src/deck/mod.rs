@@ -11,12 +11,13 @@ mod local;
 pub mod output;
 
 use std::collections::HashMap;
+use std::fmt;
 use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::engine::{Closure, Domain, Mesh, PlaneWall, WallFix, WallGeom, World};
+use crate::engine::{Closure, Domain, Mesh, PlaneWall, StepError, WallFix, WallGeom, World};
 use crate::physics::hertz::Tangential;
 use crate::physics::{Material, MprTest, Vec3};
 use output::{AveTime, Col, Dump};
@@ -41,10 +42,52 @@ pub struct Options {
 
 /// Runs a deck file. Errors come back as `FILE:LINE: message`.
 pub fn run_file(path: &Path, opts: &Options) -> Result<RunSummary, String> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("cannot read deck {}: {e}", path.display()))?;
-    let mut deck = Deck::new(path, opts)?;
-    deck.execute(&text, path)?;
+    run_file_checked(path, opts).map_err(String::from)
+}
+
+/// Why a deck run failed: the message (`FILE:LINE: …`) and, when the engine stopped on an
+/// instability (overlap beyond a radius, a non-finite value, a lost particle), that stop. Callers
+/// that search parameters (`mcdem calibrate`, the standard-MC γ ladder) tell an unstable law,
+/// which is a result, from a broken deck or file, which is not.
+#[derive(Debug, Clone)]
+pub struct DeckFailure {
+    pub message: String,
+    pub instability: Option<StepError>,
+}
+
+impl DeckFailure {
+    /// A failure that is not an engine stop.
+    pub fn other(message: String) -> Self {
+        DeckFailure { message, instability: None }
+    }
+
+    /// The same failure with `prefix: ` before its message.
+    pub fn context(self, prefix: &str) -> Self {
+        DeckFailure { message: format!("{prefix}: {}", self.message), ..self }
+    }
+}
+
+impl fmt::Display for DeckFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl From<DeckFailure> for String {
+    fn from(e: DeckFailure) -> String {
+        e.message
+    }
+}
+
+/// [`run_file`], with an engine stop kept apart from other failures.
+pub fn run_file_checked(path: &Path, opts: &Options) -> Result<RunSummary, DeckFailure> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| DeckFailure::other(format!("cannot read deck {}: {e}", path.display())))?;
+    let mut deck = Deck::new(path, opts).map_err(DeckFailure::other)?;
+    let r = deck.execute(&text, path);
+    if let Err(message) = r {
+        return Err(DeckFailure { message, instability: deck.instability.take() });
+    }
     deck.finish();
     Ok(deck.summary)
 }
@@ -117,6 +160,8 @@ enum ComputeKind {
 
 struct Deck {
     world: World,
+    /// The engine stop that ended the run, if one did (see [`DeckFailure`]).
+    instability: Option<StepError>,
     vars: HashMap<String, Var>,
     deck_dir: PathBuf,
     log: Option<BufWriter<File>>,
@@ -235,6 +280,7 @@ impl Deck {
         // LAMMPS sorts atoms spatially every 1000 steps unless `atom_modify sort` says otherwise.
         world.sort_every = 1000;
         Ok(Deck {
+            instability: None,
             world,
             vars,
             deck_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
@@ -1695,7 +1741,11 @@ impl Deck {
         let builds0 = self.world.builds;
         let updates0 = self.world.mc_influence_updates();
         while self.world.step < end {
-            self.world.step().map_err(|e| e.to_string())?;
+            self.world.step().map_err(|e| {
+                let m = e.to_string();
+                self.instability = Some(e);
+                m
+            })?;
             let last = self.world.step == end;
             if let Some(line) = self.end_of_step_outputs(last)? {
                 match &bar {

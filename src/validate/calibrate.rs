@@ -79,9 +79,9 @@ fn calibrate_one(
     let (hc, _) = uniaxial::compress(Law::HERTZ, nu, s, &data)?;
     let hertz_nrmse = uniaxial::error(&hc, &refc);
     let mut evals = 0;
-    // An unstable run (the engine's stop message names a step and a particle) counts as an
-    // infinite error; any other failure (a deck or file problem) ends the calibration, so that
-    // it cannot pass for a search result.
+    // An unstable run (the engine stopped on an instability) counts as an infinite error; any
+    // other failure (a deck or file problem) ends the calibration, so that it cannot pass for a
+    // search result.
     let mut failure: Option<String> = None;
     let mut eval = |gamma: f64, mpr: f64, e: f64| -> f64 {
         evals += 1;
@@ -91,9 +91,9 @@ fn calibrate_one(
         let err =
             match uniaxial::compress(Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nu, s, &data) {
                 Ok((c, _)) => uniaxial::error(&c, &refc),
-                Err(m) if m.contains(": step ") && m.contains(": particle ") => f64::INFINITY,
-                Err(m) => {
-                    failure = Some(m);
+                Err(f) if f.instability.is_some() => f64::INFINITY,
+                Err(f) => {
+                    failure = Some(f.message);
                     f64::INFINITY
                 }
             };

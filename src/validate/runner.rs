@@ -7,6 +7,8 @@ use std::process::Command;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
+use crate::deck::DeckFailure;
+
 /// What one deck run produced.
 #[derive(Debug, Clone)]
 pub struct DeckRun {
@@ -62,8 +64,8 @@ fn standard_vars(scratch: &Path, vars: &[(&str, String)]) -> Vec<(String, String
 }
 
 /// Runs `deck` (a file of `liggghts_inputs/`) with the Rust DEM, in-process and quiet.
-pub fn run_rust(deck: &str, vars: &[(&str, String)]) -> Result<DeckRun, String> {
-    let scratch = Scratch::new()?;
+pub fn run_rust(deck: &str, vars: &[(&str, String)]) -> Result<DeckRun, DeckFailure> {
+    let scratch = Scratch::new().map_err(DeckFailure::other)?;
     let opts = crate::deck::Options {
         vars: standard_vars(&scratch.0, vars),
         log: Some(PathBuf::from("none")),
@@ -72,10 +74,10 @@ pub fn run_rust(deck: &str, vars: &[(&str, String)]) -> Result<DeckRun, String> 
         ..Default::default()
     };
     let t = Instant::now();
-    let summary = crate::deck::run_file(&decks_dir().join(deck), &opts)
-        .map_err(|e| format!("mcdem run {deck}: {e}"))?;
+    let summary = crate::deck::run_file_checked(&decks_dir().join(deck), &opts)
+        .map_err(|e| e.context(&format!("mcdem run {deck}")))?;
     let wall_time_s = t.elapsed().as_secs_f64();
-    let table = crate::outputs::read_ave_time(&scratch.0.join("out.txt"))?;
+    let table = crate::outputs::read_ave_time(&scratch.0.join("out.txt")).map_err(DeckFailure::other)?;
     Ok(DeckRun {
         table,
         wall_time_s,

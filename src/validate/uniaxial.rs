@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use super::runner::{self, DeckRun};
 use super::{CaseResult, ModelSummary, Options, Row, Target};
+use crate::deck::DeckFailure;
 use crate::nonlocal::{Kernel, KernelKind};
 use crate::outputs::nrmse;
 
@@ -218,12 +219,15 @@ pub fn start_state(
 }
 
 /// One compression stroke of the DEM from the start state `data` (gravity on, as the deck).
-pub fn compress(m: Law, nu: f64, s: &Setup, data: &Path) -> Result<(Curve, DeckRun), String> {
+pub fn compress(m: Law, nu: f64, s: &Setup, data: &Path) -> Result<(Curve, DeckRun), DeckFailure> {
     let mut vars = deck_vars(m, nu, s, 1);
     vars.push(("data", data.display().to_string()));
     let run = runner::run_rust("hydrogel.in", &vars)?;
     if run.table.iter().any(|r| r.iter().any(|v| !v.is_finite())) {
-        return Err(format!("law {} gamma {} mpr {}: non-finite piston force", m.law, m.gamma, m.mpr));
+        return Err(DeckFailure::other(format!(
+            "law {} gamma {} mpr {}: non-finite piston force",
+            m.law, m.gamma, m.mpr
+        )));
     }
     Ok((compression(&run, s), run))
 }
@@ -355,10 +359,12 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         for g in GAMMA_LADDER {
             match compress(Law::standard(g), nu, &s, &data) {
                 Ok((c, r)) => best = Some((g, c, r)),
-                Err(e) => {
+                Err(e) if e.instability.is_some() => {
                     unstable.push(format!("ν = {nu}, standard MC γ = {g}: {e}"));
                     break;
                 }
+                // A broken deck or file is not a stability limit.
+                Err(e) => return Err(e.message),
             }
         }
         let (gamma_max, se, sc) = match &best {
@@ -370,9 +376,9 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             }
             None => (None, f64::NAN, Curve::new()),
         };
-        // An unstable advanced-MC run is a finding (reported, target missed), not a failed case.
-        // Returns the curve, its NRMSE and the run's wall time.
-        let mut advanced = |m: Law, name: &str| -> (Curve, f64, f64) {
+        // An unstable advanced-MC run is a finding (reported, target missed), not a failed case;
+        // a broken deck or file is. Returns the curve, its NRMSE and the run's wall time.
+        let mut advanced = |m: Law, name: &str| -> Result<(Curve, f64, f64), String> {
             let mut params = format!("nu={nu} gamma={} mpr={} E={}", m.gamma, m.mpr, m.youngs_modulus);
             if m.geometry_tolerance > 0.0 {
                 params += &format!(" geometryTolerance={}", m.geometry_tolerance);
@@ -382,18 +388,19 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
                     let e = error(&c, &refc);
                     push_curve(rows, name, params, &c);
                     summary(models, format!("{name} nu={nu}"), e, &run);
-                    (c, e, run.wall_time_s)
+                    Ok((c, e, run.wall_time_s))
                 }
-                Err(e) => {
+                Err(e) if e.instability.is_some() => {
                     unstable.push(format!("ν = {nu}, {name} γ = {} MPR = {}: {e}", m.gamma, m.mpr));
-                    (Curve::new(), f64::NAN, f64::NAN)
+                    Ok((Curve::new(), f64::NAN, f64::NAN))
                 }
+                Err(e) => Err(e.message),
             }
         };
-        let (bc, be, _) = advanced(Law::advanced(GAMMA_ADVANCED, MPR_ADVANCED), "mc_advanced_app_b");
+        let (bc, be, _) = advanced(Law::advanced(GAMMA_ADVANCED, MPR_ADVANCED), "mc_advanced_app_b")?;
         let cal = if opts.quick { None } else { calibrated(nu) };
         let (ac, ae, at) = match cal {
-            Some(m) => advanced(m, "mc_advanced"),
+            Some(m) => advanced(m, "mc_advanced")?,
             None => (bc.clone(), be, f64::NAN),
         };
         // The speed-against-error trade of the geometry tolerance (docs/dem.md) on the law of the
@@ -402,7 +409,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             Some(m) => advanced(
                 Law { geometry_tolerance: GEOMETRY_TOLERANCE, ..m },
                 &format!("mc_advanced_tol{GEOMETRY_TOLERANCE:e}"),
-            ),
+            )?,
             None => (Curve::new(), f64::NAN, f64::NAN),
         };
         let ordered = ae < se && se < he;
