@@ -359,3 +359,26 @@ fn hydrogel_piston_force_does_not_depend_on_the_neighbour_skin() {
         assert!(e <= 1e-5, "skin {skin} vs {}: NRMSE {e:e}", skins[0]);
     }
 }
+
+/// LIGGGHTS 3.8 cannot run the Lees–Edwards shear study in its own idiom (triclinic box + `fix
+/// deform … remap v`): a triclinic box gets no periodic ghost atoms, so contacts across periodic
+/// boundaries vanish without an error (docs/shear.md). If a LIGGGHTS version fixes this, this test
+/// fails and the shear cross-check becomes possible.
+#[test]
+fn triclinic_boxes_lose_periodic_ghosts_in_liggghts() {
+    let stat = |log: &str, key: &str| -> f64 {
+        log.lines()
+            .find_map(|l| l.strip_prefix(key))
+            .and_then(|r| r.split_whitespace().next().and_then(|v| v.parse().ok()))
+            .unwrap_or_else(|| panic!("no '{key}' line in the log"))
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let ortho = run_ok(dir.path(), "triclinic_ghost_probe.in", &[("tri", "0")]);
+    let tri = run_ok(dir.path(), "triclinic_ghost_probe.in", &[("tri", "1")]);
+    let (g0, g1) = (stat(&ortho, "Nghost:"), stat(&tri, "Nghost:"));
+    let (n0, n1) = (stat(&ortho, "Total # of neighbors ="), stat(&tri, "Total # of neighbors ="));
+    eprintln!("orthogonal: {g0} ghosts, {n0} neighbours; triclinic: {g1} ghosts, {n1} neighbours");
+    assert!(g0 > 0.0 && n0 > 0.0, "the orthogonal periodic box must have ghosts");
+    assert_eq!(g1, 0.0, "triclinic box now has ghosts: add the LIGGGHTS shear cross-check");
+    assert!(n1 < n0);
+}
