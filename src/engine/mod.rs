@@ -608,9 +608,9 @@ impl World {
     fn neighbor_check(&mut self) -> Result<(), StepError> {
         if !self.need_build {
             let Some(domain) = self.domain else { return Ok(()) };
-            let ly = domain.hi.y - domain.lo.y;
+            // Lees–Edwards strain since the build (0 without shear).
             let strain =
-                if domain.le_vjump != 0.0 || self.le_travel != 0.0 { self.le_travel / ly } else { 0.0 };
+                if self.le_travel == 0.0 { 0.0 } else { self.le_travel / (domain.hi.y - domain.lo.y) };
             let moved = if strain == 0.0 {
                 let lim = 0.25 * self.skin * self.skin;
                 self.p.x.iter().zip(&self.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim)
@@ -678,6 +678,8 @@ impl World {
                 }
             }
         }
+        // The pair cutoff without skin, read by the sort's bins and by the next rebuild test.
+        self.cut_build = 2.0 * self.p.radius.iter().copied().fold(0.0, f64::max) * self.pair_reach();
         if self.sort_every > 0 && self.step >= self.next_sort {
             self.sort_spatially(&domain);
             self.next_sort = self.step + self.sort_every;
@@ -715,22 +717,20 @@ impl World {
         self.x_build.clear();
         self.x_build.extend_from_slice(&self.p.x);
         self.le_travel = 0.0;
-        self.cut_build = 2.0 * self.p.radius.iter().copied().fold(0.0, f64::max) * self.pair_reach();
         Ok(())
     }
 
     /// Reorders the particles along a Morton (Z-order) curve of cells half a neighbour cutoff wide
     /// and remaps everything keyed by particle index: pair history (a pair whose indices change
     /// order is turned round), wall contacts and kept influence matrices. Positions must be
-    /// inside the box (called after the periodic wrap). The physics is unchanged; only summation
-    /// orders, hence round-off, differ from an unsorted run.
+    /// inside the box (called after the periodic wrap) and `cut_build` current. The physics is
+    /// unchanged; only summation orders, hence round-off, differ from an unsorted run.
     fn sort_spatially(&mut self, domain: &Domain) {
         let n = self.p.len();
         if n < 2 {
             return;
         }
-        let rmax = self.p.radius.iter().copied().fold(0.0_f64, f64::max);
-        let bin = 0.5 * (2.0 * rmax * self.pair_reach() + self.skin);
+        let bin = 0.5 * (self.cut_build + self.skin);
         let len = domain.hi - domain.lo;
         // 21 bits per axis fit a 63-bit key; coarser bins only for absurdly large boxes.
         let bins = |a: usize| ((len[a] / bin).ceil().clamp(1.0, (1u64 << 21) as f64)) as u64;
@@ -1337,8 +1337,8 @@ struct PairOut {
 }
 
 impl PairCtx<'_> {
-    /// Force on i, torques on i and j of one pair (None when not touching); updates the pair's
-    /// history when `update`.
+    /// Force on i and torques on i and j of one pair into `out` (`touching` false when apart);
+    /// updates the pair's history when `update`.
     #[inline]
     fn eval(&self, pr: &mut Pair, out: &mut PairOut) -> Result<(), Box<StepError>> {
         let p = self.p;

@@ -31,31 +31,14 @@ pub struct NormalForce {
     pub gamma_t: f64,
 }
 
-/// Effective radius R_eff = r_i r_j / (r_i + r_j) (Eq. 5); for a wall pass `None` and get r_i.
-#[inline]
-pub fn effective_radius(ri: f64, rj: Option<f64>) -> f64 {
-    match rj {
-        Some(rj) => ri * rj / (ri + rj),
-        None => ri,
-    }
-}
-
-/// Both effective quantities of a particle pair, R* = r_i r_j/(r_i + r_j) and m* = m_i m_j/(m_i + m_j),
-/// from one division (the pair loop's hot path has few enough that one more shows).
+/// Effective radius R* = r_i r_j/(r_i + r_j) (Eq. 5) and effective mass m* = m_i m_j/(m_i + m_j) of
+/// a particle pair, from one division (the pair loop's hot path has few enough that one more
+/// shows). A rigid wall is the limit r_j, m_j → ∞: R* = r_i, m* = m_i.
 #[inline(always)]
 pub fn effective_radius_and_mass(ri: f64, rj: f64, mi: f64, mj: f64) -> (f64, f64) {
     let (rs, ms) = (ri + rj, mi + mj);
     let inv = 1.0 / (rs * ms);
     (ri * rj * ms * inv, mi * mj * rs * inv)
-}
-
-/// Effective mass m_eff = m_i m_j / (m_i + m_j); for a wall pass `None` and get m_i.
-#[inline]
-pub fn effective_mass(mi: f64, mj: Option<f64>) -> f64 {
-    match mj {
-        Some(mj) => mi * mj / (mi + mj),
-        None => mi,
-    }
 }
 
 /// Normal sub-model (Eq. 5, App. C). `delta` is the overlap [m] (already including the

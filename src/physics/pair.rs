@@ -213,8 +213,10 @@ pub fn particle_wall(
         w: cri * bi.omega,
         cri,
         crj: 0.0,
-        reff: hertz::effective_radius(ri, None),
-        meff: hertz::effective_mass(bi.mass, None),
+        // The wall is the limit of an infinite, infinitely heavy partner (see
+        // `hertz::effective_radius_and_mass`).
+        reff: ri,
+        meff: bi.mass,
     };
     forces(c, &g, dt, shear).map(Some)
 }

@@ -1038,8 +1038,10 @@ fn write_outputs(
             r.particle_steps_per_s
         );
     }
-    // Run tables only when there are runs (a cost-only call before any grid run has none).
-    if !results.is_empty() {
+    // Run tables only once the grid has run (a cost-only call before any grid run has none); the
+    // report uses the same test.
+    let grid_ran = !(results.is_empty() && failed.is_empty());
+    if grid_ran {
         w("runs.csv", &csv)?;
     }
     let mut rs = String::from("mu,nu,phi_c,alpha,beta,alpha_paper,beta_paper,points,rms_log\n");
@@ -1058,7 +1060,7 @@ fn write_outputs(
             f(r.rms_log)
         );
     }
-    if !results.is_empty() {
+    if grid_ran {
         w("response_surface.csv", &rs)?;
     }
     let mut cs =
