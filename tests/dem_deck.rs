@@ -99,6 +99,23 @@ fn bad_material_value_is_named() {
 }
 
 #[test]
+fn atom_modify_sort_values_are_checked() {
+    // Accepted: LAMMPS' form, and 0 to switch spatial sorting off.
+    for ok_line in ["atom_modify map array sort 1000 0.0", "atom_modify sort 0 0"] {
+        let (ok, out) = run_deck(&format!("{ok_line}\n{BASE}run 1\n"), &[]);
+        assert!(ok, "{ok_line}: {out}");
+    }
+    for (line, named) in [
+        ("atom_modify sort -5 0.0", "Nfreq '-5' is not an integer >= 0"),
+        ("atom_modify sort 1000 -1", "binsize '-1' is not a number >= 0"),
+        ("atom_modify sort 1000", "expected Nfreq binsize"),
+    ] {
+        let (ok, out) = run_deck(&format!("{line}\n{BASE}run 1\n"), &[]);
+        assert!(!ok && out.contains(named), "{line}: {out}");
+    }
+}
+
+#[test]
 fn include_if_and_immediate_expressions() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("part.inc"), "variable from_include equal 2*${half}\n").unwrap();
