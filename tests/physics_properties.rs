@@ -7,7 +7,7 @@ use mcdem::physics::contact_set::{influence, radius_changes, radius_changes_with
 use mcdem::physics::ghods2022::{Cap, MprTest};
 use mcdem::physics::hertz::Tangential;
 use mcdem::physics::material::{Material, PairCoeffs};
-use mcdem::physics::pair::{particle_particle, particle_wall, Body, WallPoint};
+use mcdem::physics::pair::{particle_particle, particle_wall, Body, PairLanes, WallPoint, LANES};
 use mcdem::physics::Vec3;
 use proptest::prelude::*;
 
@@ -174,6 +174,67 @@ proptest! {
             prop_assert!(ft.norm() <= mu * f.normal.force.abs() * (1.0 + 1e-12) + slack);
             if !history && mu > 0.0 {
                 prop_assert_eq!(shear, Vec3::from(sh), "no_history keeps no state");
+            }
+        }
+    }
+
+    #[test]
+    fn vectorised_batch_is_the_pair_force_bit_for_bit(
+        pairs in prop::collection::vec((
+            (0.0..=0.5f64, 0.05..=1.0f64, prop_oneof![Just(0.0), 0.0..2.0f64]),
+            (direction(), 0.0..1.3f64, prop::array::uniform3(-1.0..1.0f64)),
+            (prop::array::uniform3(-100.0..100.0f64), prop::array::uniform3(-100.0..100.0f64)),
+            (prop::array::uniform3(-1e-4..1e-4f64), -1e-4..1e-4f64, -1e-4..1e-4f64),
+        ), 1..=LANES),
+        dt in prop_oneof![Just(0.0), Just(1e-5)],
+    ) {
+        // Random overlapping pairs (some beyond a radius, frictionless, undamped among them) in
+        // one batch: each lane must give exactly what `particle_particle` gives for that pair,
+        // and flag exactly the pairs it refuses.
+        let mut lanes = PairLanes::default();
+        let mut expected = Vec::new();
+        for ((nu, e, mu), (dir, gap, vi), (wi, wj), (sh, dri, drj)) in pairs {
+            let m = Material::hertz(23.3e3, nu).unwrap();
+            let c = PairCoeffs::new(&m, &m, e, mu).unwrap();
+            let bj = Body { x: Vec3::new(0.1, -0.2, 0.3), v: Vec3::zeros(), omega: Vec3::from(wj), radius: 1.2 * R, mass: 7e-6 };
+            let bi = Body { x: bj.x + dir * (2.2 * R - gap * R), v: Vec3::from(vi), omega: Vec3::from(wi), radius: R, mass: 4e-6 };
+            let d = bi.x - bj.x;
+            let radsum = (bi.radius + dri) + (bj.radius + drj);
+            if d.norm_squared() >= radsum * radsum {
+                continue;
+            }
+            let l = expected.len();
+            for a in 0..3 {
+                lanes.d[a][l] = d[a];
+                lanes.vr[a][l] = bi.v[a] - bj.v[a];
+                lanes.omega_i[a][l] = bi.omega[a];
+                lanes.omega_j[a][l] = bj.omega[a];
+                lanes.shear[a][l] = sh[a];
+            }
+            (lanes.radius_i[l], lanes.radius_j[l], lanes.dri[l], lanes.drj[l]) = (bi.radius, bj.radius, dri, drj);
+            (lanes.mass_i[l], lanes.mass_j[l]) = (bi.mass, bj.mass);
+            (lanes.e_star[l], lanes.g_star[l], lanes.beta[l]) = (c.e_star, c.g_star, c.beta);
+            (lanes.friction[l], lanes.damping_ratio_t_n[l]) = (c.friction, c.damping_ratio_t_n);
+            let mut shear = Vec3::from(sh);
+            let r = particle_particle(&c, &bi, &bj, dri, drj, dt, &mut shear);
+            expected.push((r, shear));
+        }
+        prop_assume!(!expected.is_empty());
+        lanes.pad_from_first(expected.len());
+        lanes.evaluate(dt);
+        for (l, (r, shear)) in expected.iter().enumerate() {
+            let lane = |a: &[[f64; LANES]; 3]| Vec3::new(a[0][l], a[1][l], a[2][l]);
+            match r {
+                Ok(Some(f)) => {
+                    prop_assert!(lanes.ok[l]);
+                    prop_assert_eq!(lane(&lanes.force), f.force_i);
+                    prop_assert_eq!(lane(&lanes.torque_i), f.torque_i);
+                    prop_assert_eq!(lane(&lanes.torque_j), f.torque_j);
+                    prop_assert_eq!(lane(&lanes.shear), *shear);
+                    prop_assert_eq!(lanes.fnorm[l], f.force_i.dot(&f.en).abs());
+                }
+                Ok(None) => unreachable!("only overlapping pairs are batched"),
+                Err(_) => prop_assert!(!lanes.ok[l], "lane {} accepted a pair the pair force refuses", l),
             }
         }
     }

@@ -16,7 +16,9 @@ use std::fmt;
 
 use crate::physics::contact_set::{loaded_threshold, radius_changes, ContactLoad, InfluenceCache, McParams};
 use crate::physics::hertz::Tangential;
-use crate::physics::pair::{particle_particle, particle_wall, Body, ContactError, WallPoint};
+use crate::physics::pair::{
+    particle_particle, particle_wall, Body, ContactError, PairLanes, WallPoint, LANES,
+};
 use crate::physics::{Material, PairCoeffs, Vec3};
 
 pub use mesh::Mesh;
@@ -1041,18 +1043,31 @@ impl World {
             step: self.step,
             liggghts_radii: self.liggghts_radii,
         };
+        // The vectorised batches evaluate `tangential history` with the radii of SPEC §2; the
+        // LIGGGHTS `surface multicontact` radii and `no_history` take the pair-by-pair path.
+        let batched = !self.liggghts_radii
+            && self.coeffs.iter().all(|c| c.tangential == Tangential::History)
+            && PairLanes::vectorised();
         if self.parallel && self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
             use rayon::prelude::*;
             // Every entry is overwritten below: only the length has to match (no per-step fill).
             if self.pair_out.len() != self.pairs.len() {
                 self.pair_out.resize(self.pairs.len(), PairOut::default());
             }
-            self.pairs
-                .par_iter_mut()
-                .zip(self.pair_out.par_iter_mut())
-                .with_min_len(256)
-                .try_for_each(|(pr, out)| ctx.eval(pr, out))
-                .map_err(|e| *e)?;
+            if batched {
+                self.pairs
+                    .par_chunks_mut(PARALLEL_CHUNK)
+                    .zip(self.pair_out.par_chunks_mut(PARALLEL_CHUNK))
+                    .try_for_each(|(prs, outs)| ctx.eval_batched(prs, |k, _, _, o| outs[k] = *o))
+                    .map_err(|e| *e)?;
+            } else {
+                self.pairs
+                    .par_iter_mut()
+                    .zip(self.pair_out.par_iter_mut())
+                    .with_min_len(PARALLEL_CHUNK)
+                    .try_for_each(|(pr, out)| ctx.eval(pr, out))
+                    .map_err(|e| *e)?;
+            }
             for (pr, o) in self.pairs.iter().zip(&self.pair_out) {
                 if o.touching {
                     let (i, j) = (pr.i as usize, pr.j as usize);
@@ -1069,15 +1084,26 @@ impl World {
             f.resize(n, Vec3::zeros());
             torque.clear();
             torque.resize(n, Vec3::zeros());
-            let mut o = PairOut::default();
-            for pr in self.pairs.iter_mut() {
-                ctx.eval(pr, &mut o).map_err(|e| *e)?;
-                if o.touching {
-                    let (i, j) = (pr.i as usize, pr.j as usize);
-                    f[i] += o.force;
-                    f[j] -= o.force;
-                    torque[i] += o.torque_i;
-                    torque[j] += o.torque_j;
+            let mut scatter = |i: usize, j: usize, o: &PairOut| {
+                f[i] += o.force;
+                f[j] -= o.force;
+                torque[i] += o.torque_i;
+                torque[j] += o.torque_j;
+            };
+            if batched {
+                ctx.eval_batched(&mut self.pairs, |_, i, j, o| {
+                    if o.touching {
+                        scatter(i, j, o)
+                    }
+                })
+                .map_err(|e| *e)?;
+            } else {
+                let mut o = PairOut::default();
+                for pr in self.pairs.iter_mut() {
+                    ctx.eval(pr, &mut o).map_err(|e| *e)?;
+                    if o.touching {
+                        scatter(pr.i as usize, pr.j as usize, &o);
+                    }
                 }
             }
             std::mem::swap(&mut self.p.f, &mut self.f_buf);
@@ -1313,6 +1339,9 @@ const TUNE_WINDOW: u64 = 50;
 /// Below this many candidate pairs a step is too short for threads to pay off.
 const PARALLEL_MIN_PAIRS: usize = 1024;
 
+/// Pairs per parallel work item.
+const PARALLEL_CHUNK: usize = 256;
+
 /// Read-only view of the state that one pair evaluation needs (shared between threads).
 struct PairCtx<'a> {
     p: &'a Particles,
@@ -1407,6 +1436,122 @@ impl PairCtx<'_> {
             pr.fn_prev = fnorm;
             pr.ri_prev = ri_stored;
             pr.rj_prev = rj;
+        }
+        Ok(())
+    }
+}
+
+impl PairCtx<'_> {
+    /// Evaluates `pairs` in order as [`PairCtx::eval`] does, overlapping pairs in vectorised
+    /// batches of [`LANES`]; hands each pair's result to `sink(k, i, j, out)` (k: index in
+    /// `pairs`). Touching pairs reach the sink in pair order; pairs apart may come earlier.
+    fn eval_batched(
+        &self,
+        pairs: &mut [Pair],
+        mut sink: impl FnMut(usize, usize, usize, &PairOut),
+    ) -> Result<(), Box<StepError>> {
+        let p = self.p;
+        let mut lanes = PairLanes::default();
+        let mut slot = [0usize; LANES];
+        let mut n = 0;
+        for k in 0..pairs.len() {
+            let pr = &mut pairs[k];
+            let (i, j) = (pr.i as usize, pr.j as usize);
+            let mut d = p.x[i] - p.x[j];
+            let kimg = self.domain.minimum_image_k(&mut d);
+            let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
+            let radsum = ri + rj;
+            let d2 = d.norm_squared();
+            let reach = (1.0 + RECEIVER_GAP) * (p.radius[i] + p.radius[j]);
+            pr.near = d2 < reach * reach;
+            if d2 >= radsum * radsum {
+                pr.force = Vec3::zeros();
+                pr.torque = Vec3::zeros();
+                if self.update {
+                    pr.shear = Vec3::zeros();
+                    pr.fn_prev = 0.0;
+                    pr.ri_prev = ri;
+                    pr.rj_prev = rj;
+                }
+                sink(k, i, j, &PairOut::default());
+                continue;
+            }
+            // The image of j across a sheared boundary carries the Lees–Edwards velocity jump.
+            let mut vj = p.v[j];
+            vj.x += kimg * self.domain.le_vjump;
+            let c = &self.coeffs[p.typ[i] * self.nt + p.typ[j]];
+            let l = n;
+            for a in 0..3 {
+                lanes.d[a][l] = d[a];
+                lanes.vr[a][l] = p.v[i][a] - vj[a];
+                lanes.omega_i[a][l] = p.omega[i][a];
+                lanes.omega_j[a][l] = p.omega[j][a];
+                lanes.shear[a][l] = pr.shear[a];
+            }
+            lanes.radius_i[l] = p.radius[i];
+            lanes.radius_j[l] = p.radius[j];
+            lanes.dri[l] = pr.dri;
+            lanes.drj[l] = pr.drj;
+            lanes.mass_i[l] = p.mass[i];
+            lanes.mass_j[l] = p.mass[j];
+            lanes.e_star[l] = c.e_star;
+            lanes.g_star[l] = c.g_star;
+            lanes.beta[l] = c.beta;
+            lanes.friction[l] = c.friction;
+            lanes.damping_ratio_t_n[l] = c.damping_ratio_t_n;
+            slot[n] = k;
+            n += 1;
+            if n == LANES {
+                self.flush(&mut lanes, &slot[..n], pairs, &mut sink)?;
+                n = 0;
+            }
+        }
+        if n > 0 {
+            lanes.pad_from_first(n);
+            self.flush(&mut lanes, &slot[..n], pairs, &mut sink)?;
+        }
+        Ok(())
+    }
+
+    /// Evaluates a filled batch and writes each used lane back to its pair and to the sink.
+    fn flush(
+        &self,
+        lanes: &mut PairLanes,
+        slot: &[usize],
+        pairs: &mut [Pair],
+        sink: &mut impl FnMut(usize, usize, usize, &PairOut),
+    ) -> Result<(), Box<StepError>> {
+        lanes.evaluate(self.dt);
+        for (l, &k) in slot.iter().enumerate() {
+            let pr = &mut pairs[k];
+            if !lanes.ok[l] {
+                // The pair-by-pair path names the cause (its history is still the step's input).
+                let mut o = PairOut::default();
+                self.eval(pr, &mut o)?;
+                let (i, j) = (pr.i as usize, pr.j as usize);
+                return Err(Box::new(contact_error(
+                    self.step,
+                    self.p.id[i],
+                    Some(self.p.id[j]),
+                    ContactError::NonFinite,
+                )));
+            }
+            let lane = |a: &[[f64; LANES]; 3]| Vec3::new(a[0][l], a[1][l], a[2][l]);
+            let o = PairOut {
+                touching: true,
+                force: lane(&lanes.force),
+                torque_i: lane(&lanes.torque_i),
+                torque_j: lane(&lanes.torque_j),
+            };
+            pr.force = o.force;
+            pr.torque = o.torque_i;
+            if self.update {
+                pr.shear = lane(&lanes.shear);
+                pr.fn_prev = lanes.fnorm[l];
+                pr.ri_prev = lanes.radius_i[l] + lanes.dri[l];
+                pr.rj_prev = lanes.radius_j[l] + lanes.drj[l];
+            }
+            sink(k, pr.i as usize, pr.j as usize, &o);
         }
         Ok(())
     }

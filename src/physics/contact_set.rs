@@ -180,9 +180,9 @@ pub fn radius_changes(
         let s = &mut *s.borrow_mut();
         s.load(contacts, pref, threshold, false);
         match p.cap.map(|c| c.test) {
-            None => s.sum_terms::<NO_CAP>(nu, &mut delta[..n]),
-            Some(MprTest::Abs) => s.sum_terms::<ABS_CAP>(nu, &mut delta[..n]),
-            Some(MprTest::Signed) => s.sum_terms::<SIGNED_CAP>(nu, &mut delta[..n]),
+            None => s.sum_terms_dispatch::<NO_CAP>(nu, &mut delta[..n]),
+            Some(MprTest::Abs) => s.sum_terms_dispatch::<ABS_CAP>(nu, &mut delta[..n]),
+            Some(MprTest::Signed) => s.sum_terms_dispatch::<SIGNED_CAP>(nu, &mut delta[..n]),
         }
         let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak)?;
         Ok(KernelSummary { loaded, fallbacks })
@@ -432,7 +432,8 @@ thread_local! {
 }
 
 /// The contacts of one particle by component (structure of arrays): the pair loop then runs over
-/// contiguous lanes, which the compiler vectorises (sqrt and divisions two or four at a time).
+/// contiguous lanes, which the compiler vectorises (four square roots and divisions at a time
+/// under AVX2, see [`Scratch::sum_terms_dispatch`]).
 #[derive(Default)]
 struct Scratch {
     px: Vec<f64>,
@@ -487,6 +488,23 @@ impl Scratch {
         self.peak.resize(n, 0.0);
         self.back.clear();
         self.back.resize(n, 0.0);
+    }
+
+    /// [`Scratch::sum_terms`], compiled for AVX2 when the CPU has it (see [`super::avx2`]).
+    fn sum_terms_dispatch<const CAP: u8>(&mut self, nu: f64, delta: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if super::avx2() {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { self.sum_terms_avx2::<CAP>(nu, delta) };
+            return;
+        }
+        self.sum_terms::<CAP>(nu, delta);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn sum_terms_avx2<const CAP: u8>(&mut self, nu: f64, delta: &mut [f64]) {
+        self.sum_terms::<CAP>(nu, delta);
     }
 
     /// Eq. 2 summed over every source for every target, each unordered pair visited once (one
