@@ -85,6 +85,9 @@ enum Command {
         /// Also write the rows and ratios as JSON
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Run only this scene group (repeatable; default: all)
+        #[arg(long = "scene", value_parser = clap::builder::PossibleValuesParser::new(mcdem::bench::SCENES))]
+        scenes: Vec<String>,
     },
     /// Fit advanced MC (γ, MPR, and E where ν > 0.3) per Poisson ratio against the nonlocal reference (Fig. 5)
     Calibrate {
@@ -364,8 +367,8 @@ fn uniaxial(
     Ok(())
 }
 
-fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), String> {
-    let report = mcdem::bench::run(mcdem::bench::Options { quick }, &mut |l| eprintln!("{l}"))?;
+fn bench(quick: bool, json: Option<PathBuf>, scenes: Vec<String>) -> Result<(), String> {
+    let report = mcdem::bench::run(mcdem::bench::Options { quick, scenes }, &mut |l| eprintln!("{l}"))?;
     print!("{}", mcdem::bench::table(&report));
     if let Some(p) = json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
@@ -386,7 +389,7 @@ fn main() -> ExitCode {
             rayon::scope(|_| run(deck, var, log, no_progress, mc_geometry_tolerance))
         }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
-        Command::Bench { quick, json } => bench(quick, json),
+        Command::Bench { quick, json, scenes } => bench(quick, json, scenes),
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
         Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, solid_volume, out } => {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)

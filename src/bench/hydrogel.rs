@@ -83,7 +83,7 @@ pub fn tolerance_model(tol: f64) -> String {
     format!("mc_advanced tol={tol:e}")
 }
 
-pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
+pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
     let decks = Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs");
     if !decks.join("hydrogel.in").exists() || !Path::new(EXAMPLE).join("data/input.data").exists() {
         report.notes.push(format!(

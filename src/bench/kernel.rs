@@ -9,7 +9,7 @@ use super::{Options, Report, Row};
 use crate::physics::contact_set::{radius_changes, McParams};
 use crate::physics::ghods2022::{Cap, MprTest};
 
-pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) {
+pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) {
     let r = 1e-3;
     let budget = if opts.quick { 0.05 } else { 0.5 };
     for n in [2usize, 6, 12] {

@@ -46,19 +46,41 @@ pub struct Report {
     pub errors: BTreeMap<String, f64>,
 }
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Options {
     /// CI size: shorter strokes, smaller packings, fewer steps.
     pub quick: bool,
+    /// Scene groups to run (names from [`SCENES`]); empty = all.
+    pub scenes: Vec<String>,
+}
+
+/// The scene groups, in the order they run.
+pub const SCENES: [&str; 4] = ["kernel", "packing", "hydrogel", "nonlocal"];
+
+impl Options {
+    fn runs(&self, scene: &str) -> bool {
+        self.scenes.is_empty() || self.scenes.iter().any(|s| s == scene)
+    }
 }
 
 /// Runs every available row group; `say` receives progress lines.
 pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
     let mut report = Report::default();
-    kernel::rows(opts, &mut report, say);
-    packing::rows(opts, &mut report, say)?;
-    hydrogel::rows(opts, &mut report, say)?;
-    nonlocal::rows(opts, &mut report, say)?;
+    if let Some(bad) = opts.scenes.iter().find(|s| !SCENES.contains(&s.as_str())) {
+        return Err(format!("ERROR: unknown bench scene '{bad}' (expected one of {})", SCENES.join(", ")));
+    }
+    if opts.runs("kernel") {
+        kernel::rows(&opts, &mut report, say);
+    }
+    if opts.runs("packing") {
+        packing::rows(&opts, &mut report, say)?;
+    }
+    if opts.runs("hydrogel") {
+        hydrogel::rows(&opts, &mut report, say)?;
+    }
+    if opts.runs("nonlocal") {
+        nonlocal::rows(&opts, &mut report, say)?;
+    }
     ratios(&mut report);
     Ok(report)
 }

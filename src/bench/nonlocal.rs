@@ -13,7 +13,7 @@ use crate::nonlocal::{Kernel, KernelKind};
 pub const SCENE: &str = "nonlocal_514_to_phi_0.85";
 const STEPS: usize = 40;
 
-pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
+pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
     let state = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("validation/cases/nonlocal/hydrogel_start_2nd_compression.dump");
     if !state.is_file() {

@@ -80,7 +80,7 @@ fn packing(k: usize, advanced: bool) -> Result<World, String> {
     Ok(w)
 }
 
-pub fn rows(opts: Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
+pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
     let steps = if opts.quick { 40 } else { 200 };
     let base = rss_bytes();
     for &k in cells(opts.quick) {

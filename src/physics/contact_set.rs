@@ -180,9 +180,9 @@ pub fn radius_changes(
         let s = &mut *s.borrow_mut();
         s.load(contacts, pref, threshold, false);
         match p.cap.map(|c| c.test) {
-            None => s.sum_terms_dispatch::<NO_CAP>(nu, &mut delta[..n]),
-            Some(MprTest::Abs) => s.sum_terms_dispatch::<ABS_CAP>(nu, &mut delta[..n]),
-            Some(MprTest::Signed) => s.sum_terms_dispatch::<SIGNED_CAP>(nu, &mut delta[..n]),
+            None => s.sum_terms::<NO_CAP>(nu, &mut delta[..n]),
+            Some(MprTest::Abs) => s.sum_terms::<ABS_CAP>(nu, &mut delta[..n]),
+            Some(MprTest::Signed) => s.sum_terms::<SIGNED_CAP>(nu, &mut delta[..n]),
         }
         let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak)?;
         Ok(KernelSummary { loaded, fallbacks })
@@ -277,17 +277,17 @@ pub fn influence(p: &McParams, contacts: &[ContactLoad], g: &mut [f64]) -> Resul
         let s = &mut *s.borrow_mut();
         // Every contact as a unit source of weight pref (a point at the centre still gets 0).
         s.load(contacts, pref, 0.0, true);
-        let (px, py, pz, w) = (&s.px[..n], &s.py[..n], &s.pz[..n], &s.w[..n]);
-        let (nx, ny, nz) = (&s.nx[..n], &s.ny[..n], &s.nz[..n]);
+        s.chords(n, nu);
+        let w = &s.w[..n];
         for c in 0..n {
             g[c * n + c] = 0.0;
         }
+        let mut k = 0;
         for a in 0..n {
-            let (pa, na) = ([px[a], py[a], pz[a]], [nx[a], ny[a], nz[a]]);
             for b in a + 1..n {
-                let (g_ab, g_ba) = chord_terms(pa, na, [px[b], py[b], pz[b]], [nx[b], ny[b], nz[b]], nu);
-                g[a * n + b] = g_ab * w[a];
-                g[b * n + a] = g_ba * w[b];
+                g[a * n + b] = s.g_ab[k] * w[a];
+                g[b * n + a] = s.g_ba[k] * w[b];
+                k += 1;
             }
         }
     });
@@ -432,8 +432,9 @@ thread_local! {
 }
 
 /// The contacts of one particle by component (structure of arrays): the pair loop then runs over
-/// contiguous lanes, which the compiler vectorises (four square roots and divisions at a time
-/// under AVX2, see [`Scratch::sum_terms_dispatch`]).
+/// contiguous lanes; the chords of all pairs are then evaluated in one flat loop, which the
+/// compiler vectorises (four square roots and divisions at a time under AVX2, see
+/// [`Scratch::chords`]).
 #[derive(Default)]
 struct Scratch {
     px: Vec<f64>,
@@ -444,6 +445,14 @@ struct Scratch {
     nz: Vec<f64>,
     /// Source weight −γ(1+ν)/(2πE) · F_k; zero for an unloaded contact (it exerts nothing).
     w: Vec<f64>,
+    /// Per unordered pair (a < b, in order): n_a·c, n_b·c, n_a·n_b and c·c of the chord
+    /// c = p_b − p_a, then Eq. 2's bracket over the chord both ways (B_ab/d, B_ba/d).
+    a_c: Vec<f64>,
+    b_c: Vec<f64>,
+    ab: Vec<f64>,
+    d2: Vec<f64>,
+    g_ab: Vec<f64>,
+    g_ba: Vec<f64>,
     /// Largest neighbour term received so far, in the cap's measure (starts at 0).
     peak: Vec<f64>,
     /// Terms the current source receives back from the later contacts (summed in order after).
@@ -454,16 +463,22 @@ impl Scratch {
     /// Points, normals and source weights pref·F_k; `unit_sources` gives every contact the weight
     /// pref whatever its force (the influence matrix, which the forces multiply later).
     fn load(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, unit_sources: bool) {
-        let lanes =
-            [&mut self.px, &mut self.py, &mut self.pz, &mut self.nx, &mut self.ny, &mut self.nz, &mut self.w];
-        for v in lanes {
-            v.clear();
+        let n = contacts.len();
+        // Lengths only: every entry is written below (`peak` must start at 0; `back` is written
+        // before it is read).
+        for v in
+            [&mut self.px, &mut self.py, &mut self.pz, &mut self.nx, &mut self.ny, &mut self.nz, &mut self.w]
+        {
+            v.resize(n, 0.0);
         }
-        for c in contacts {
+        self.back.resize(n, 0.0);
+        self.peak.clear();
+        self.peak.resize(n, 0.0);
+        for (k, c) in contacts.iter().enumerate() {
             let l = c.point.norm();
             // A point at the centre has no normal: zero normal and weight make the contact
             // neither exert nor receive a term (every term carries a normal or the weight).
-            let (n, w) = if l > 0.0 {
+            let (nrm, w) = if l > 0.0 {
                 let w = if unit_sources {
                     pref
                 } else if c.force > threshold {
@@ -475,36 +490,68 @@ impl Scratch {
             } else {
                 (Vec3::zeros(), 0.0)
             };
-            self.px.push(c.point.x);
-            self.py.push(c.point.y);
-            self.pz.push(c.point.z);
-            self.nx.push(n.x);
-            self.ny.push(n.y);
-            self.nz.push(n.z);
-            self.w.push(w);
+            (self.px[k], self.py[k], self.pz[k]) = (c.point.x, c.point.y, c.point.z);
+            (self.nx[k], self.ny[k], self.nz[k]) = (nrm.x, nrm.y, nrm.z);
+            self.w[k] = w;
         }
-        let n = contacts.len();
-        self.peak.clear();
-        self.peak.resize(n, 0.0);
-        self.back.clear();
-        self.back.resize(n, 0.0);
     }
 
-    /// [`Scratch::sum_terms`], compiled for AVX2 when the CPU has it (see [`super::avx2`]).
-    fn sum_terms_dispatch<const CAP: u8>(&mut self, nu: f64, delta: &mut [f64]) {
+    /// Eq. 2's bracket over the chord, both ways, for every unordered pair of the first `n`
+    /// loaded contacts, into `g_ab`, `g_ba` (pairs in row order: (0,1) … (0,n−1), (1,2) …).
+    /// Compiled for AVX2 when the CPU has it (see [`super::avx2`]): both loops are flat runs of
+    /// independent lanes, and the bracket loop has a square root and a division per lane.
+    fn chords(&mut self, n: usize, nu: f64) {
         #[cfg(target_arch = "x86_64")]
         if super::avx2() {
             // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.sum_terms_avx2::<CAP>(nu, delta) };
+            unsafe { self.chords_avx2(n, nu) };
             return;
         }
-        self.sum_terms::<CAP>(nu, delta);
+        self.chords_lanes(n, nu);
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn sum_terms_avx2<const CAP: u8>(&mut self, nu: f64, delta: &mut [f64]) {
-        self.sum_terms::<CAP>(nu, delta);
+    unsafe fn chords_avx2(&mut self, n: usize, nu: f64) {
+        self.chords_lanes(n, nu);
+    }
+
+    #[inline(always)]
+    fn chords_lanes(&mut self, n: usize, nu: f64) {
+        let m = n * n.saturating_sub(1) / 2;
+        // Lengths only: every entry is written below.
+        for v in [&mut self.a_c, &mut self.b_c, &mut self.ab, &mut self.d2, &mut self.g_ab, &mut self.g_ba] {
+            v.resize(m, 0.0);
+        }
+        let (px, py, pz) = (&self.px[..n], &self.py[..n], &self.pz[..n]);
+        let (nx, ny, nz) = (&self.nx[..n], &self.ny[..n], &self.nz[..n]);
+        let mut k = 0;
+        for a in 0..n {
+            // Row a: pairs (a, a+1 … n−1), slices of one known length so the loop has no bounds
+            // checks and vectorises.
+            let len = n - a - 1;
+            let (pa, na) = ([px[a], py[a], pz[a]], [nx[a], ny[a], nz[a]]);
+            let (bx, by, bz) = (&px[a + 1..][..len], &py[a + 1..][..len], &pz[a + 1..][..len]);
+            let (mx, my, mz) = (&nx[a + 1..][..len], &ny[a + 1..][..len], &nz[a + 1..][..len]);
+            let (a_c, b_c) = (&mut self.a_c[k..][..len], &mut self.b_c[k..][..len]);
+            let (ab, d2) = (&mut self.ab[k..][..len], &mut self.d2[k..][..len]);
+            for b in 0..len {
+                (a_c[b], b_c[b], ab[b], d2[b]) = chord(pa, na, [bx[b], by[b], bz[b]], [mx[b], my[b], mz[b]]);
+            }
+            k += len;
+        }
+        self.bracket_lanes(nu);
+    }
+
+    /// Eq. 2's bracket over the chord for every pair: independent lanes, a square root and a
+    /// division each.
+    #[inline(always)]
+    fn bracket_lanes(&mut self, nu: f64) {
+        let m = self.d2.len();
+        let (a_c, b_c, ab, d2) = (&self.a_c[..m], &self.b_c[..m], &self.ab[..m], &self.d2[..m]);
+        for (k, (g_ab, g_ba)) in self.g_ab[..m].iter_mut().zip(&mut self.g_ba[..m]).enumerate() {
+            (*g_ab, *g_ba) = bracket_pair_over_chord(a_c[k], b_c[k], ab[k], d2[k], nu);
+        }
     }
 
     /// Eq. 2 summed over every source for every target, each unordered pair visited once (one
@@ -513,29 +560,37 @@ impl Scratch {
     #[inline(always)]
     fn sum_terms<const CAP: u8>(&mut self, nu: f64, delta: &mut [f64]) {
         let n = delta.len();
-        let (px, py, pz) = (&self.px[..n], &self.py[..n], &self.pz[..n]);
-        let (nx, ny, nz, w) = (&self.nx[..n], &self.ny[..n], &self.nz[..n], &self.w[..n]);
+        self.chords(n, nu);
+        let w = &self.w[..n];
         let (peak, back) = (&mut self.peak[..n], &mut self.back[..n]);
+        let mut k = 0;
         for a in 0..n {
-            let (pa, na, wa) = ([px[a], py[a], pz[a]], [nx[a], ny[a], nz[a]], w[a]);
-            for b in a + 1..n {
-                let (g_ab, g_ba) = chord_terms(pa, na, [px[b], py[b], pz[b]], [nx[b], ny[b], nz[b]], nu);
-                let t_ab = g_ab * wa;
-                back[b] = g_ba * w[b];
-                delta[b] += t_ab;
+            let len = n - a - 1;
+            let wa = w[a];
+            // Row a as slices of one known length (no bounds checks: the loop vectorises).
+            let (g_ab, g_ba) = (&self.g_ab[k..][..len], &self.g_ba[k..][..len]);
+            let (w_b, back_b) = (&w[a + 1..][..len], &mut back[a + 1..][..len]);
+            let (d_a, d_b) = delta.split_at_mut(a + 1);
+            let (p_a, p_b) = peak.split_at_mut(a + 1);
+            let (d_b, p_b) = (&mut d_b[..len], &mut p_b[..len]);
+            for b in 0..len {
+                let t_ab = g_ab[b] * wa;
+                back_b[b] = g_ba[b] * w_b[b];
+                d_b[b] += t_ab;
                 if CAP != NO_CAP {
-                    peak[b] = peak[b].max(measure::<CAP>(t_ab));
+                    p_b[b] = p_b[b].max(measure::<CAP>(t_ab));
                 }
             }
-            let (mut acc, mut pk) = (delta[a], peak[a]);
-            for &t in &back[a + 1..n] {
+            let (mut acc, mut pk) = (d_a[a], p_a[a]);
+            for &t in back_b.iter() {
                 acc += t;
                 if CAP != NO_CAP {
                     pk = pk.max(measure::<CAP>(t));
                 }
             }
-            delta[a] = acc;
-            peak[a] = pk;
+            d_a[a] = acc;
+            p_a[a] = pk;
+            k += len;
         }
     }
 
@@ -558,15 +613,14 @@ impl Scratch {
     }
 }
 
-/// Eq. 2's bracket over the chord, both directions, for contacts a and b given by their points p
-/// and inward normals n. Coincident points give (0, 0): the half-space kernel is singular there
-/// and the local Hertz term already carries the load.
+/// The chord c = p_b − p_a of contacts a and b (points p, inward normals n) as Eq. 2's bracket
+/// reads it: (n_a·c, n_b·c, n_a·n_b, c·c).
 #[inline(always)]
-fn chord_terms(pa: [f64; 3], na: [f64; 3], pb: [f64; 3], nb: [f64; 3], nu: f64) -> (f64, f64) {
+fn chord(pa: [f64; 3], na: [f64; 3], pb: [f64; 3], nb: [f64; 3]) -> (f64, f64, f64, f64) {
     let (cx, cy, cz) = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]);
     let d2 = cx * cx + cy * cy + cz * cz;
     let a_c = na[0] * cx + na[1] * cy + na[2] * cz;
     let b_c = nb[0] * cx + nb[1] * cy + nb[2] * cz;
     let ab = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
-    bracket_pair_over_chord(a_c, b_c, ab, d2, nu)
+    (a_c, b_c, ab, d2)
 }
