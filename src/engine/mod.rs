@@ -12,9 +12,12 @@
 pub mod mesh;
 pub mod neighbor;
 
+use std::cell::RefCell;
 use std::fmt;
 
-use crate::physics::contact_set::{loaded_threshold, radius_changes, ContactLoad, InfluenceCache, McParams};
+use crate::physics::contact_set::{
+    loaded_threshold, radius_changes, ContactLoad, InfluenceCache, KeptInfluence, McParams,
+};
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::{
     particle_particle, particle_wall, Body, ContactError, PairLanes, WallPoint, LANES,
@@ -397,9 +400,8 @@ pub struct World {
     slot_start: Vec<u32>,
     slots: Vec<Slot>,
     slot_fill: Vec<u32>,
-    loads: Vec<ContactLoad>,
-    dr_buf: Vec<f64>,
-    fb_buf: Vec<bool>,
+    /// Radius change per slot, from this step's kernel pass.
+    slot_dr: Vec<f64>,
     /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
     /// contact appeared or left, a pair entered or left the multi-contact set).
     slots_stale: bool,
@@ -946,62 +948,37 @@ impl World {
         if stale || self.slots_stale {
             self.build_slots();
         }
-        for i in 0..n {
-            let (s0, s1) = (self.slot_start[i] as usize, self.slot_start[i + 1] as usize);
-            if s1 - s0 < 2 {
-                continue;
+        // The kernel particle by particle into one Δ per slot (threads on disjoint particle
+        // ranges when they pay), then Δ to the pairs and wall contacts.
+        self.slot_dr.resize(self.slots.len(), 0.0);
+        let ctx = McCtx {
+            p: &self.p,
+            mc_types: &self.mc_types,
+            slot_start: &self.slot_start,
+            slots: &self.slots,
+            pair_loads: &self.pair_loads,
+            wc: &self.wc,
+            step: self.step,
+        };
+        let parallel = self.parallel && n >= 2 * MC_GRAIN && rayon::current_num_threads() > 1;
+        let (tolerance, kept) = match self.mc_cache.as_mut() {
+            Some(c) => {
+                let (t, k) = c.slots_mut(n);
+                (t, Some(k))
             }
-            self.loads.clear();
-            for s in &self.slots[s0..s1] {
-                let (point, force) = match *s {
-                    Slot::PairI(k) => {
-                        let l = &self.pair_loads[k as usize];
-                        (l.points[0], l.force)
-                    }
-                    Slot::PairJ(k) => {
-                        let l = &self.pair_loads[k as usize];
-                        (l.points[1], l.force)
-                    }
-                    Slot::Wall(k) => {
-                        let c = &self.wc[k as usize];
-                        (c.rel_prev, c.fn_prev)
-                    }
-                };
-                self.loads.push(ContactLoad { point, force });
-            }
-            let m = self.mc_types[self.p.typ[i]].material;
-            let params = McParams {
-                radius: self.p.radius[i],
-                youngs_modulus: m.youngs_modulus,
-                poisson_ratio: m.poisson_ratio,
-                gamma: m.gamma,
-                cap: m.cap,
-            };
-            let nl = self.loads.len();
-            if self.dr_buf.len() < nl {
-                self.dr_buf.resize(nl, 0.0);
-            }
-            if self.fb_buf.len() < nl {
-                self.fb_buf.resize(nl, false);
-            }
-            let (dr, fb) = (&mut self.dr_buf[..nl], &mut self.fb_buf[..nl]);
-            let res = match self.mc_cache.as_mut() {
-                Some(cache) => cache.radius_changes(i, &params, &self.loads, dr, fb),
-                None => radius_changes(&params, &self.loads, dr, fb),
-            };
-            let summary = res.map_err(|e| StepError {
-                step: self.step,
-                particle: self.p.id[i],
-                cause: format!("multi-contact kernel: {e}"),
-            })?;
-            self.mc_kernel_contacts += nl as u64;
-            self.mc_kernel_fallbacks += summary.fallbacks as u64;
-            for (s, &d) in self.slots[s0..s1].iter().zip(&self.dr_buf[..nl]) {
-                match *s {
-                    Slot::PairI(k) => self.pairs[k as usize].dri = d,
-                    Slot::PairJ(k) => self.pairs[k as usize].drj = d,
-                    Slot::Wall(k) => self.wc[k as usize].dr = d,
-                }
+            None => (0.0, None),
+        };
+        let counts = ctx.kernel(0, n, &mut self.slot_dr, kept, tolerance, parallel).map_err(|(_, e)| e)?;
+        self.mc_kernel_contacts += counts.contacts;
+        self.mc_kernel_fallbacks += counts.fallbacks;
+        if let Some(c) = self.mc_cache.as_mut() {
+            c.recomputed += counts.recomputed;
+        }
+        for (s, &d) in self.slots.iter().zip(&self.slot_dr) {
+            match *s {
+                Slot::PairI(k) => self.pairs[k as usize].dri = d,
+                Slot::PairJ(k) => self.pairs[k as usize].drj = d,
+                Slot::Wall(k) => self.wc[k as usize].dr = d,
             }
         }
         Ok(())
@@ -1554,6 +1531,133 @@ impl PairCtx<'_> {
             sink(k, pr.i as usize, pr.j as usize, &o);
         }
         Ok(())
+    }
+}
+
+/// Particles per leaf of the threaded multi-contact pass.
+const MC_GRAIN: usize = 64;
+
+/// Kernel calls, fallbacks to Hertz and influence-matrix recomputations of a multi-contact pass.
+#[derive(Debug, Clone, Copy, Default)]
+struct McCounts {
+    contacts: u64,
+    fallbacks: u64,
+    recomputed: u64,
+}
+
+thread_local! {
+    /// One particle's contact loads, radius changes and fallback flags: per thread, grown to the
+    /// largest contact set seen and reused (no allocation in the step loop).
+    static MC_SCRATCH: RefCell<(Vec<ContactLoad>, Vec<f64>, Vec<bool>)> = RefCell::default();
+}
+
+/// Read-only view of what the multi-contact kernel pass needs (shared between threads).
+struct McCtx<'a> {
+    p: &'a Particles,
+    mc_types: &'a [McType],
+    slot_start: &'a [u32],
+    slots: &'a [Slot],
+    pair_loads: &'a [PairLoad],
+    wc: &'a [WallContact],
+    step: u64,
+}
+
+impl McCtx<'_> {
+    /// Radius changes of particles lo..hi into `dr` (exactly their slots), kept matrices in
+    /// `kept` (exactly those particles) under a geometry tolerance. With `parallel` the range is
+    /// halved recursively over the rayon threads; every particle's result is the same either
+    /// way, and of several failures the lowest particle's is reported, as in a serial pass.
+    fn kernel(
+        &self,
+        lo: usize,
+        hi: usize,
+        dr: &mut [f64],
+        kept: Option<&mut [KeptInfluence]>,
+        tolerance: f64,
+        parallel: bool,
+    ) -> Result<McCounts, (usize, StepError)> {
+        if parallel && hi - lo > MC_GRAIN {
+            let mid = lo + (hi - lo) / 2;
+            let (dl, dh) = dr.split_at_mut((self.slot_start[mid] - self.slot_start[lo]) as usize);
+            let (kl, kh) = match kept {
+                Some(k) => {
+                    let (a, b) = k.split_at_mut(mid - lo);
+                    (Some(a), Some(b))
+                }
+                None => (None, None),
+            };
+            let (a, b) = rayon::join(
+                || self.kernel(lo, mid, dl, kl, tolerance, true),
+                || self.kernel(mid, hi, dh, kh, tolerance, true),
+            );
+            return match (a, b) {
+                (Ok(a), Ok(b)) => Ok(McCounts {
+                    contacts: a.contacts + b.contacts,
+                    fallbacks: a.fallbacks + b.fallbacks,
+                    recomputed: a.recomputed + b.recomputed,
+                }),
+                (Err(e), _) | (Ok(_), Err(e)) => Err(e),
+            };
+        }
+        MC_SCRATCH.with(|buf| {
+            let (loads, dr_buf, fb_buf) = &mut *buf.borrow_mut();
+            let mut counts = McCounts::default();
+            let mut kept = kept;
+            let base = self.slot_start[lo] as usize;
+            for i in lo..hi {
+                let (s0, s1) = (self.slot_start[i] as usize, self.slot_start[i + 1] as usize);
+                let out = &mut dr[s0 - base..s1 - base];
+                if s1 - s0 < 2 {
+                    out.fill(0.0);
+                    continue;
+                }
+                loads.clear();
+                loads.extend(self.slots[s0..s1].iter().map(|s| {
+                    let (point, force) = match *s {
+                        Slot::PairI(k) => {
+                            let l = &self.pair_loads[k as usize];
+                            (l.points[0], l.force)
+                        }
+                        Slot::PairJ(k) => {
+                            let l = &self.pair_loads[k as usize];
+                            (l.points[1], l.force)
+                        }
+                        Slot::Wall(k) => {
+                            let c = &self.wc[k as usize];
+                            (c.rel_prev, c.fn_prev)
+                        }
+                    };
+                    ContactLoad { point, force }
+                }));
+                let m = self.mc_types[self.p.typ[i]].material;
+                let params = McParams {
+                    radius: self.p.radius[i],
+                    youngs_modulus: m.youngs_modulus,
+                    poisson_ratio: m.poisson_ratio,
+                    gamma: m.gamma,
+                    cap: m.cap,
+                };
+                let nl = loads.len();
+                if dr_buf.len() < nl {
+                    dr_buf.resize(nl, 0.0);
+                    fb_buf.resize(nl, false);
+                }
+                let (d, fb) = (&mut dr_buf[..nl], &mut fb_buf[..nl]);
+                let res = match kept.as_deref_mut() {
+                    Some(k) => k[i - lo].radius_changes(tolerance, &params, loads, d, fb),
+                    None => radius_changes(&params, loads, d, fb).map(|s| (s, false)),
+                };
+                let (summary, recomputed) = res.map_err(|e| {
+                    let cause = format!("multi-contact kernel: {e}");
+                    (i, StepError { step: self.step, particle: self.p.id[i], cause })
+                })?;
+                counts.contacts += nl as u64;
+                counts.fallbacks += summary.fallbacks as u64;
+                counts.recomputed += u64::from(recomputed);
+                out.copy_from_slice(d);
+            }
+            Ok(counts)
+        })
     }
 }
 

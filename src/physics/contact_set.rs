@@ -342,16 +342,48 @@ pub fn radius_changes_with(
 #[derive(Debug, Default)]
 pub struct InfluenceCache {
     tolerance: f64,
-    kept: Vec<Kept>,
+    kept: Vec<KeptInfluence>,
     /// Calls that (re)computed a matrix.
     pub recomputed: u64,
 }
 
+/// One slot of an [`InfluenceCache`]: the matrix kept for one contact set. Slots are independent,
+/// so an engine may hand disjoint runs of them to different threads ([`InfluenceCache::slots_mut`]).
 #[derive(Debug, Default)]
-struct Kept {
+pub struct KeptInfluence {
     params: Option<McParams>,
     points: Vec<Vec3>,
     g: Vec<f64>,
+}
+
+impl KeptInfluence {
+    /// [`radius_changes`] from the kept matrix, recomputed first unless it is current for
+    /// `contacts` within `tolerance` × radius (see [`InfluenceCache`]). The flag says whether it
+    /// was recomputed.
+    pub fn radius_changes(
+        &mut self,
+        tolerance: f64,
+        p: &McParams,
+        contacts: &[ContactLoad],
+        delta: &mut [f64],
+        hertz_fallback: &mut [bool],
+    ) -> Result<(KernelSummary, bool), KernelError> {
+        let lim = (tolerance * p.radius).powi(2);
+        let current = self.params.as_ref() == Some(p)
+            && self.points.len() == contacts.len()
+            && contacts.iter().zip(&self.points).all(|(c, q)| (c.point - q).norm_squared() <= lim);
+        if !current {
+            let n = contacts.len();
+            self.g.resize(n * n, 0.0);
+            self.params = None;
+            influence(p, contacts, &mut self.g)?;
+            self.points.clear();
+            self.points.extend(contacts.iter().map(|c| c.point));
+            self.params = Some(*p);
+        }
+        let summary = radius_changes_with(p, &self.g, contacts, delta, hertz_fallback)?;
+        Ok((summary, !current))
+    }
 }
 
 impl InfluenceCache {
@@ -378,6 +410,15 @@ impl InfluenceCache {
             .collect();
     }
 
+    /// The first `n` slots (grown as needed), to be used independently, with the tolerance.
+    /// Add the recomputations to [`InfluenceCache::recomputed`].
+    pub fn slots_mut(&mut self, n: usize) -> (f64, &mut [KeptInfluence]) {
+        if self.kept.len() < n {
+            self.kept.resize_with(n, Default::default);
+        }
+        (self.tolerance, &mut self.kept[..n])
+    }
+
     /// [`radius_changes`] of the contact set kept in `slot`.
     pub fn radius_changes(
         &mut self,
@@ -387,25 +428,11 @@ impl InfluenceCache {
         delta: &mut [f64],
         hertz_fallback: &mut [bool],
     ) -> Result<KernelSummary, KernelError> {
-        if self.kept.len() <= slot {
-            self.kept.resize_with(slot + 1, Default::default);
-        }
-        let k = &mut self.kept[slot];
-        let lim = (self.tolerance * p.radius).powi(2);
-        let current = k.params.as_ref() == Some(p)
-            && k.points.len() == contacts.len()
-            && contacts.iter().zip(&k.points).all(|(c, q)| (c.point - q).norm_squared() <= lim);
-        if !current {
-            let n = contacts.len();
-            k.g.resize(n * n, 0.0);
-            k.params = None;
-            influence(p, contacts, &mut k.g)?;
-            k.points.clear();
-            k.points.extend(contacts.iter().map(|c| c.point));
-            k.params = Some(*p);
-            self.recomputed += 1;
-        }
-        radius_changes_with(p, &k.g, contacts, delta, hertz_fallback)
+        let (tolerance, kept) = self.slots_mut(slot + 1);
+        let (summary, recomputed) =
+            kept[slot].radius_changes(tolerance, p, contacts, delta, hertz_fallback)?;
+        self.recomputed += u64::from(recomputed);
+        Ok(summary)
     }
 }
 
