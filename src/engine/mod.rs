@@ -402,6 +402,9 @@ pub struct World {
     slot_fill: Vec<u32>,
     /// Radius change per slot, from this step's kernel pass.
     slot_dr: Vec<f64>,
+    /// Per particle, its pairs (see `build_incidence`), as compressed rows.
+    inc_start: Vec<u32>,
+    inc: Vec<u32>,
     /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
     /// contact appeared or left, a pair entered or left the multi-contact set).
     slots_stale: bool,
@@ -718,10 +721,37 @@ impl World {
             });
         }
         self.slots_stale = true;
+        self.build_incidence();
         self.x_build.clear();
         self.x_build.extend_from_slice(&self.p.x);
         self.le_travel = 0.0;
         Ok(())
+    }
+
+    /// Per particle, its pairs in pair order (index × 2 + side, side 1 when it is the pair's j),
+    /// as compressed rows: the threaded force pass sums each particle's pair results from these,
+    /// in the order the serial pass adds them.
+    fn build_incidence(&mut self) {
+        let n = self.p.len();
+        self.inc_start.clear();
+        self.inc_start.resize(n + 1, 0);
+        for pr in &self.pairs {
+            self.inc_start[pr.i as usize + 1] += 1;
+            self.inc_start[pr.j as usize + 1] += 1;
+        }
+        for i in 0..n {
+            self.inc_start[i + 1] += self.inc_start[i];
+        }
+        self.inc.resize(2 * self.pairs.len(), 0);
+        self.slot_fill.clear();
+        self.slot_fill.extend_from_slice(&self.inc_start[..n]);
+        for (k, pr) in self.pairs.iter().enumerate() {
+            for (a, side) in [(pr.i, 0), (pr.j, 1)] {
+                let at = &mut self.slot_fill[a as usize];
+                self.inc[*at as usize] = 2 * k as u32 + side;
+                *at += 1;
+            }
+        }
     }
 
     /// Reorders the particles along a Morton (Z-order) curve of cells half a neighbour cutoff wide
@@ -1045,15 +1075,33 @@ impl World {
                     .try_for_each(|(pr, out)| ctx.eval(pr, out))
                     .map_err(|e| *e)?;
             }
-            for (pr, o) in self.pairs.iter().zip(&self.pair_out) {
-                if o.touching {
-                    let (i, j) = (pr.i as usize, pr.j as usize);
-                    self.p.f[i] += o.force;
-                    self.p.f[j] -= o.force;
-                    self.p.torque[i] += o.torque_i;
-                    self.p.torque[j] += o.torque_j;
-                }
-            }
+            // Each particle sums its own pairs' results in pair order, as the serial pass adds
+            // them (from zero: the sums were cleared above): no write is shared between threads.
+            let (start, inc, outs) = (&self.inc_start, &self.inc, &self.pair_out);
+            self.p
+                .f
+                .par_chunks_mut(PARALLEL_CHUNK)
+                .zip(self.p.torque.par_chunks_mut(PARALLEL_CHUNK))
+                .enumerate()
+                .for_each(|(c, (fs, ts))| {
+                    for (o, (f, t)) in fs.iter_mut().zip(ts.iter_mut()).enumerate() {
+                        let i = c * PARALLEL_CHUNK + o;
+                        let (mut fa, mut ta) = (*f, *t);
+                        for &e in &inc[start[i] as usize..start[i + 1] as usize] {
+                            let out = &outs[(e >> 1) as usize];
+                            if out.touching {
+                                if e & 1 == 0 {
+                                    fa += out.force;
+                                    ta += out.torque_i;
+                                } else {
+                                    fa -= out.force;
+                                    ta += out.torque_j;
+                                }
+                            }
+                        }
+                        (*f, *t) = (fa, ta);
+                    }
+                });
         } else {
             // Same accumulation order as the parallel path: identical sums.
             let (f, torque) = (&mut self.f_buf, &mut self.t_buf);
