@@ -81,7 +81,10 @@ fn packing(k: usize, advanced: bool) -> Result<World, String> {
 }
 
 pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
-    let steps = if opts.quick { 40 } else { 200 };
+    // At least ~4e6 particle-steps per row (the small packing's steps are short: timing noise),
+    // after a warm-up that covers the engine's first serial-vs-threads probe.
+    let steps_for = |n: usize| if opts.quick { 40 } else { (4_000_000 / n).max(200) };
+    let warmup = 5 + crate::engine::THREAD_PROBE_STEPS;
     let base = rss_bytes();
     for &k in cells(opts.quick) {
         for (model, advanced) in [("hertz", false), ("mc_advanced", true)] {
@@ -94,7 +97,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                     let mut w = packing(k, advanced)?;
                     w.setup()?;
                     // Warm-up: the neighbour list, contact histories and the thread-use probe.
-                    for _ in 0..5 {
+                    for _ in 0..warmup {
                         w.step().map_err(|e| e.to_string())?;
                     }
                     let n = w.p.len();
@@ -103,11 +106,12 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                         _ => None,
                     };
                     let t0 = Instant::now();
-                    for _ in 0..steps {
+                    for _ in 0..steps_for(n) {
                         w.step().map_err(|e| e.to_string())?;
                     }
                     Ok((n, t0.elapsed().as_secs_f64(), mem))
                 })?;
+                let steps = steps_for(n);
                 report.rows.push(Row {
                     engine: "rust",
                     model: model.into(),
@@ -126,7 +130,8 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
         }
     }
     report.notes.push(format!(
-        "packing: {steps} steps after 5 warm-up steps; memory = resident-set growth over the start of the bench while the scene is alive"
+        "packing: {} after {warmup} warm-up steps (the engine's first thread probe included); memory = resident-set growth over the start of the bench while the scene is alive",
+        if opts.quick { "40 steps" } else { "max(200, 4e6/N) steps" }
     ));
     Ok(())
 }

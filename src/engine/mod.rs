@@ -1349,6 +1349,9 @@ const RECEIVER_GAP: f64 = 0.1;
 const TUNE_PERIOD: u64 = 5000;
 const TUNE_WINDOW: u64 = 50;
 
+/// Steps after which the first serial-vs-threads probe has decided (benchmarks warm up this long).
+pub const THREAD_PROBE_STEPS: u64 = 2 * TUNE_WINDOW;
+
 /// Below this many candidate pairs a step is too short for threads to pay off.
 const PARALLEL_MIN_PAIRS: usize = 1024;
 
