@@ -29,12 +29,21 @@ pub mod pair;
 pub fn avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::is_x86_feature_detected!("avx2")
+        !PORTABLE.load(std::sync::atomic::Ordering::Relaxed) && std::is_x86_feature_detected!("avx2")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
         false
     }
+}
+
+static PORTABLE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Makes [`avx2`] answer false from now on, in this process: the baseline code paths then run
+/// whatever the CPU, so a test can compare them with the AVX2 ones (they must agree bit for bit).
+#[doc(hidden)]
+pub fn use_portable_code() {
+    PORTABLE.store(true, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// 3-vector used throughout the core (SI units).
