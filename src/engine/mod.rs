@@ -1075,6 +1075,10 @@ impl World {
                     .try_for_each(|(pr, out)| ctx.eval(pr, out))
                     .map_err(|e| *e)?;
             }
+            if self.inc_start.len() != n + 1 || self.inc.len() != 2 * self.pairs.len() {
+                // Built at every neighbour build; particles added since have none yet.
+                self.build_incidence();
+            }
             // Each particle sums its own pairs' results in pair order, as the serial pass adds
             // them (from zero: the sums were cleared above): no write is shared between threads.
             let (start, inc, outs) = (&self.inc_start, &self.inc, &self.pair_out);
