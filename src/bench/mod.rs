@@ -9,7 +9,7 @@
 mod hydrogel;
 mod kernel;
 mod nonlocal;
-mod packing;
+pub mod packing;
 
 use std::collections::BTreeMap;
 

@@ -30,7 +30,8 @@ fn rss_bytes() -> Option<f64> {
     Some(pages * 4096.0)
 }
 
-fn packing(k: usize, advanced: bool) -> Result<World, String> {
+/// The packing with 4 k³ spheres, Hertz or advanced MC (γ = 0.81, MPR = 0.11), set up to step.
+pub fn scene(k: usize, advanced: bool) -> Result<World, String> {
     let d = 1e-3;
     // fcc at contact: a = √2 d, φ = π/(3√2) ≈ 0.7405; shrink the lattice to reach φ = 0.8.
     let phi_fcc = std::f64::consts::PI / (3.0 * 2f64.sqrt());
@@ -94,7 +95,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                     .build()
                     .map_err(|e| e.to_string())?;
                 let (n, secs, mem) = pool.install(|| -> Result<(usize, f64, Option<f64>), String> {
-                    let mut w = packing(k, advanced)?;
+                    let mut w = scene(k, advanced)?;
                     w.setup()?;
                     // Warm-up: the neighbour list, contact histories and the thread-use probe.
                     for _ in 0..warmup {

@@ -1390,28 +1390,13 @@ impl PairCtx<'_> {
     /// updates the pair's history when `update`.
     #[inline]
     fn eval(&self, pr: &mut Pair, out: &mut PairOut) -> Result<(), Box<StepError>> {
-        let p = self.p;
-        let (i, j) = (pr.i as usize, pr.j as usize);
-        let mut d = p.x[i] - p.x[j];
-        let kimg = self.domain.minimum_image_k(&mut d);
-        let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
-        let radsum = ri + rj;
-        let d2 = d.norm_squared();
-        let reach = (1.0 + RECEIVER_GAP) * (p.radius[i] + p.radius[j]);
-        pr.near = d2 < reach * reach;
-        if d2 >= radsum * radsum {
-            // The force is output, not history: the set-up pass records it too.
-            pr.force = Vec3::zeros();
-            pr.torque = Vec3::zeros();
-            if self.update {
-                pr.shear = Vec3::zeros();
-                pr.fn_prev = 0.0;
-                pr.ri_prev = ri;
-                pr.rj_prev = rj;
-            }
+        let Some((d, kimg)) = self.approach(pr) else {
             out.touching = false;
             return Ok(());
-        }
+        };
+        let p = self.p;
+        let (i, j) = (pr.i as usize, pr.j as usize);
+        let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
         let bi = Body { x: p.x[i], v: p.v[i], omega: p.omega[i], radius: p.radius[i], mass: p.mass[i] };
         // The image of j across a sheared boundary carries the Lees–Edwards velocity jump.
         let mut vj = p.v[j];
@@ -1458,6 +1443,35 @@ impl PairCtx<'_> {
             pr.rj_prev = rj;
         }
         Ok(())
+    }
+
+    /// What both pair passes do first: the centre difference d = x_i − x_j (minimum image) and
+    /// the image count across a sheared boundary, and the `near` flag. A pair whose modified
+    /// spheres are apart gets its outputs and history reset, and `None`.
+    #[inline(always)]
+    fn approach(&self, pr: &mut Pair) -> Option<(Vec3, f64)> {
+        let p = self.p;
+        let (i, j) = (pr.i as usize, pr.j as usize);
+        let mut d = p.x[i] - p.x[j];
+        let kimg = self.domain.minimum_image_k(&mut d);
+        let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
+        let radsum = ri + rj;
+        let d2 = d.norm_squared();
+        let reach = (1.0 + RECEIVER_GAP) * (p.radius[i] + p.radius[j]);
+        pr.near = d2 < reach * reach;
+        if d2 >= radsum * radsum {
+            // The force is output, not history: the set-up pass records it too.
+            pr.force = Vec3::zeros();
+            pr.torque = Vec3::zeros();
+            if self.update {
+                pr.shear = Vec3::zeros();
+                pr.fn_prev = 0.0;
+                pr.ri_prev = ri;
+                pr.rj_prev = rj;
+            }
+            return None;
+        }
+        Some((d, kimg))
     }
 }
 
@@ -1509,25 +1523,10 @@ impl PairCtx<'_> {
         for k in 0..pairs.len() {
             let pr = &mut pairs[k];
             let (i, j) = (pr.i as usize, pr.j as usize);
-            let mut d = p.x[i] - p.x[j];
-            let kimg = self.domain.minimum_image_k(&mut d);
-            let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
-            let radsum = ri + rj;
-            let d2 = d.norm_squared();
-            let reach = (1.0 + RECEIVER_GAP) * (p.radius[i] + p.radius[j]);
-            pr.near = d2 < reach * reach;
-            if d2 >= radsum * radsum {
-                pr.force = Vec3::zeros();
-                pr.torque = Vec3::zeros();
-                if self.update {
-                    pr.shear = Vec3::zeros();
-                    pr.fn_prev = 0.0;
-                    pr.ri_prev = ri;
-                    pr.rj_prev = rj;
-                }
+            let Some((d, kimg)) = self.approach(pr) else {
                 sink.put(k, i, j, &PairOut::default());
                 continue;
-            }
+            };
             // The image of j across a sheared boundary carries the Lees–Edwards velocity jump.
             let mut vj = p.v[j];
             vj.x += kimg * self.domain.le_vjump;
