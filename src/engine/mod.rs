@@ -998,7 +998,7 @@ impl World {
             }
             None => (0.0, None),
         };
-        let counts = ctx.kernel(0, n, &mut self.slot_dr, kept, tolerance, parallel).map_err(|(_, e)| e)?;
+        let counts = ctx.kernel(0, n, &mut self.slot_dr, kept, tolerance, parallel)?;
         self.mc_kernel_contacts += counts.contacts;
         self.mc_kernel_fallbacks += counts.fallbacks;
         if let Some(c) = self.mc_cache.as_mut() {
@@ -1620,9 +1620,9 @@ struct McCounts {
 }
 
 thread_local! {
-    /// One particle's contact loads, radius changes and fallback flags: per thread, grown to the
-    /// largest contact set seen and reused (no allocation in the step loop).
-    static MC_SCRATCH: RefCell<(Vec<ContactLoad>, Vec<f64>, Vec<bool>)> = RefCell::default();
+    /// One particle's contact loads and fallback flags: per thread, grown to the largest contact
+    /// set seen and reused (no allocation in the step loop).
+    static MC_SCRATCH: RefCell<(Vec<ContactLoad>, Vec<bool>)> = RefCell::default();
 }
 
 /// Read-only view of what the multi-contact kernel pass needs (shared between threads).
@@ -1640,7 +1640,8 @@ impl McCtx<'_> {
     /// Radius changes of particles lo..hi into `dr` (exactly their slots), kept matrices in
     /// `kept` (exactly those particles) under a geometry tolerance. With `parallel` the range is
     /// halved recursively over the rayon threads; every particle's result is the same either
-    /// way, and of several failures the lowest particle's is reported, as in a serial pass.
+    /// way, and of several failures the lowest particle's is reported (the lower half's comes
+    /// first), as in a serial pass.
     fn kernel(
         &self,
         lo: usize,
@@ -1649,7 +1650,7 @@ impl McCtx<'_> {
         kept: Option<&mut [KeptInfluence]>,
         tolerance: f64,
         parallel: bool,
-    ) -> Result<McCounts, (usize, StepError)> {
+    ) -> Result<McCounts, StepError> {
         if parallel && hi - lo > MC_GRAIN {
             let mid = lo + (hi - lo) / 2;
             let (dl, dh) = dr.split_at_mut((self.slot_start[mid] - self.slot_start[lo]) as usize);
@@ -1674,7 +1675,7 @@ impl McCtx<'_> {
             };
         }
         MC_SCRATCH.with(|buf| {
-            let (loads, dr_buf, fb_buf) = &mut *buf.borrow_mut();
+            let (loads, fb_buf) = &mut *buf.borrow_mut();
             let mut counts = McCounts::default();
             let mut kept = kept;
             let base = self.slot_start[lo] as usize;
@@ -1712,23 +1713,23 @@ impl McCtx<'_> {
                     cap: m.cap,
                 };
                 let nl = loads.len();
-                if dr_buf.len() < nl {
-                    dr_buf.resize(nl, 0.0);
+                if fb_buf.len() < nl {
                     fb_buf.resize(nl, false);
                 }
-                let (d, fb) = (&mut dr_buf[..nl], &mut fb_buf[..nl]);
+                // The particle's slots are its contacts in order: Δ goes straight into them.
+                let fb = &mut fb_buf[..nl];
                 let res = match kept.as_deref_mut() {
-                    Some(k) => k[i - lo].radius_changes(tolerance, &params, loads, d, fb),
-                    None => radius_changes(&params, loads, d, fb).map(|s| (s, false)),
+                    Some(k) => k[i - lo].radius_changes(tolerance, &params, loads, out, fb),
+                    None => radius_changes(&params, loads, out, fb).map(|s| (s, false)),
                 };
-                let (summary, recomputed) = res.map_err(|e| {
-                    let cause = format!("multi-contact kernel: {e}");
-                    (i, StepError { step: self.step, particle: self.p.id[i], cause })
+                let (summary, recomputed) = res.map_err(|e| StepError {
+                    step: self.step,
+                    particle: self.p.id[i],
+                    cause: format!("multi-contact kernel: {e}"),
                 })?;
                 counts.contacts += nl as u64;
                 counts.fallbacks += summary.fallbacks as u64;
                 counts.recomputed += u64::from(recomputed);
-                out.copy_from_slice(d);
             }
             Ok(counts)
         })

@@ -524,7 +524,7 @@ impl Scratch {
     }
 
     /// Eq. 2's bracket over the chord, both ways, for every unordered pair of the first `n`
-    /// loaded contacts, into `g_ab`, `g_ba` (pairs in row order: (0,1) … (0,n−1), (1,2) …).
+    /// contacts of [`Scratch::load`], into `g_ab`, `g_ba` (pairs in row order: (0,1) … (0,n−1), (1,2) …).
     /// Compiled for AVX2 when the CPU has it (see [`super::avx2`]): both loops are flat runs of
     /// independent lanes, and the bracket loop has a square root and a division per lane.
     fn chords(&mut self, n: usize, nu: f64) {
