@@ -30,7 +30,7 @@ fn rss_bytes() -> Option<f64> {
     Some(pages * 4096.0)
 }
 
-/// The packing with 4 k³ spheres, Hertz or advanced MC (γ = 0.81, MPR = 0.11), set up to step.
+/// The packing with 4 k³ spheres, Hertz or advanced MC (γ = 0.81, MPR = 0.11), ready for `setup`.
 pub fn scene(k: usize, advanced: bool) -> Result<World, String> {
     let d = 1e-3;
     // fcc at contact: a = √2 d, φ = π/(3√2) ≈ 0.7405; shrink the lattice to reach φ = 0.8.
