@@ -140,6 +140,13 @@ enum Study {
         /// Maximum penetration ratio of Eq. 3 for every ν (default: per ν from the recorded calibration)
         #[arg(long)]
         mpr: Option<f64>,
+        /// Friction coefficients to run, comma-separated (default: the grid's); a sub-grid's
+        /// finished runs count for a later call on the whole grid in the same directory
+        #[arg(long, value_delimiter = ',')]
+        mu: Vec<f64>,
+        /// Poisson ratios to run, comma-separated (default: the grid's)
+        #[arg(long, value_delimiter = ',')]
+        nu: Vec<f64>,
         /// Runs side by side, one thread each (default 2)
         #[arg(long, default_value_t = 2)]
         threads: usize,
@@ -154,11 +161,23 @@ enum Study {
 
 fn study(s: Study) -> Result<(), String> {
     match s {
-        Study::Shear { grid, out, n, gamma, mpr, threads, no_cost, cost_only } => {
+        Study::Shear { grid, out, n, gamma, mpr, mu, nu, threads, no_cost, cost_only } => {
             use mcdem::study::shear;
             let mut g = if grid == "full" { shear::Grid::full() } else { shear::Grid::quick() };
             if let Some(n) = n {
                 g.n = n;
+            }
+            if let Some(m) = mu.iter().find(|m| !(m.is_finite() && **m >= 0.0)) {
+                return Err(format!("--mu {m}: a friction coefficient must be finite and >= 0"));
+            }
+            if let Some(v) = nu.iter().find(|v| !(0.0..=0.5).contains(*v)) {
+                return Err(format!("--nu {v}: a Poisson ratio must lie in [0, 0.5]"));
+            }
+            if !mu.is_empty() {
+                g.mus = mu;
+            }
+            if !nu.is_empty() {
+                g.nus = nu;
             }
             g.gamma_mc = gamma;
             g.mpr = mpr;

@@ -112,3 +112,22 @@ fn eq8_fit_recovers_synthetic_power_laws_with_shared_phi_c() {
     assert!((fits[0].alpha - 0.1).abs() < 1e-5 && (fits[0].beta - 0.5).abs() < 1e-5, "{fits:?}");
     assert!((fits[1].alpha - 0.3).abs() < 1e-5 && (fits[1].beta - 0.9).abs() < 1e-5, "{fits:?}");
 }
+
+#[test]
+fn sub_grid_filters_name_bad_values() {
+    let dir = tempfile::tempdir().unwrap();
+    for (arg, words) in [("--nu=0.7", "Poisson ratio"), ("--mu=-0.1", "friction coefficient"), ("--mu=0,nan", "friction")] {
+        let out = assert_cmd::Command::cargo_bin("mcdem")
+            .unwrap()
+            .args(["study", "shear", "--grid", "quick", "--no-cost", arg, "--out"])
+            .arg(dir.path())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{arg} was accepted");
+        let flag = arg.split('=').next().unwrap();
+        assert!(err.contains(flag) && err.contains(words), "{arg}: {err}");
+    }
+    // Nothing ran: the output directory holds no run.
+    assert!(!dir.path().join("runs").exists());
+}

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use super::format;
 use super::output::create;
-use crate::engine::World;
+use crate::engine::{PairContact, World};
 
 /// A keyword of `compute pair/gran/local` and the columns it adds (LIGGGHTS order).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,9 +76,10 @@ impl PairLocal {
     }
 
     /// Values of every touching pair, one row each.
-    fn rows(&self, w: &World) -> Vec<Vec<f64>> {
+    fn rows(&self, contacts: &[PairContact], w: &World) -> Vec<Vec<f64>> {
         let p = &w.p;
-        w.touching_pairs()
+        contacts
+            .iter()
             .map(|c| {
                 let mut row = Vec::with_capacity(32);
                 let r = c.branch.norm();
@@ -177,12 +178,12 @@ impl LocalDump {
     pub fn write(&mut self, w: &mut World, computes: &HashMap<String, PairLocal>) -> Result<(), String> {
         self.last = Some(w.step);
         self.check(computes)?;
-        w.evaluate_pair_outputs().map_err(|e| e.to_string())?;
+        let contacts = w.touching_pairs().map_err(|e| e.to_string())?;
         let w = &*w;
         let mut tables: HashMap<&str, Vec<Vec<f64>>> = HashMap::new();
         for (id, _) in &self.refs {
             if !tables.contains_key(id.as_str()) {
-                tables.insert(id, computes[id].rows(w));
+                tables.insert(id, computes[id].rows(&contacts, w));
             }
         }
         let n = tables.values().next().map_or(0, Vec::len);

@@ -209,8 +209,13 @@ pub struct WallFix {
     pub geom: WallGeom,
 }
 
-/// Candidate pair with its contact history (tangential ξ) and the multi-contact bookkeeping.
+/// Candidate pair with its contact history (tangential ξ) and what the next multi-contact pass
+/// reads: exactly what every step reads and writes per pair, in one cache line. Per-step
+/// transients (this step's radius changes, the recorded force) live in their own arrays: at
+/// large N the pairs no longer fit in cache, and the passes that only need these fields (the
+/// multi-contact gather, the slot lists) then stream half the bytes.
 #[derive(Debug, Clone, Copy)]
+#[repr(align(64))]
 struct Pair {
     i: u32,
     j: u32,
@@ -220,16 +225,13 @@ struct Pair {
     /// Modified radii r + Δ used at the previous step (contact point of the next step, as LIGGGHTS).
     ri_prev: f64,
     rj_prev: f64,
-    dri: f64,
-    drj: f64,
-    /// Total contact force on i from j at the last evaluation (zero when apart): stress compute.
-    force: Vec3,
-    /// Torque on i from this contact at the last evaluation (`compute pair/gran/local`).
-    torque: Vec3,
     /// Centres closer than (1 + RECEIVER_GAP)(r_i + r_j) at the last evaluation: the pair may
     /// receive multi-contact terms (growth could make it touch). True for a new pair.
     near: bool,
 }
+
+/// This step's multi-contact radius changes of a pair: [Δ of i at this contact, Δ of j].
+type PairDr = [f64; 2];
 
 /// A pair's contact as the multi-contact kernel sees it: the contact points relative to i and to
 /// j, and the previous step's normal force.
@@ -413,6 +415,13 @@ pub struct World {
     /// Geometry tolerance: the kept influence matrices, one per particle.
     mc_cache: Option<InfluenceCache>,
     pair_out: Vec<PairOut>,
+    /// Per pair: this step's multi-contact radius changes (zero without the closure).
+    pair_dr: Vec<PairDr>,
+    /// `pair_dr` holds radius changes that a Hertz pass must not see.
+    pair_dr_dirty: bool,
+    /// Per pair: the total contact force on i from j at the last force pass (zero when apart),
+    /// for the stress and coordination outputs.
+    pair_force: Vec<Vec3>,
     pair_mc: Vec<bool>,
     f_buf: Vec<Vec3>,
     t_buf: Vec<Vec3>,
@@ -712,10 +721,6 @@ impl World {
                     // the centre and receives no multi-contact term until the pair is evaluated.
                     ri_prev: 0.0,
                     rj_prev: 0.0,
-                    dri: 0.0,
-                    drj: 0.0,
-                    force: Vec3::zeros(),
-                    torque: Vec3::zeros(),
                     near: true,
                 },
             });
@@ -801,9 +806,6 @@ impl World {
                 (pr.i, pr.j) = (b, a);
                 pr.shear = -pr.shear;
                 std::mem::swap(&mut pr.ri_prev, &mut pr.rj_prev);
-                std::mem::swap(&mut pr.dri, &mut pr.drj);
-                pr.force = -pr.force;
-                pr.torque = Vec3::zeros();
             }
         }
         self.pairs.sort_unstable_by_key(|pr| (pr.i, pr.j));
@@ -937,6 +939,10 @@ impl World {
             self.slots_stale = true;
         }
         self.pair_loads.resize(self.pairs.len(), PairLoad::default());
+        // Pairs outside the multi-contact set get no slot, hence no change.
+        self.pair_dr.clear();
+        self.pair_dr.resize(self.pairs.len(), [0.0; 2]);
+        self.pair_dr_dirty = true;
         let (p, types) = (&self.p, &self.mc_types);
         // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
         let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
@@ -950,11 +956,7 @@ impl World {
         // spheres' surfaces along the centre line when loaded, else each particle's own surface
         // point.
         let mut stale = false;
-        for ((pr, m), load) in
-            self.pairs.iter_mut().zip(self.pair_mc.iter_mut()).zip(self.pair_loads.iter_mut())
-        {
-            pr.dri = 0.0;
-            pr.drj = 0.0;
+        for ((pr, m), load) in self.pairs.iter().zip(self.pair_mc.iter_mut()).zip(self.pair_loads.iter_mut()) {
             let now = pr.fn_prev > 0.0 || pr.near;
             if *m != now {
                 *m = now;
@@ -1006,8 +1008,8 @@ impl World {
         }
         for (s, &d) in self.slots.iter().zip(&self.slot_dr) {
             match *s {
-                Slot::PairI(k) => self.pairs[k as usize].dri = d,
-                Slot::PairJ(k) => self.pairs[k as usize].drj = d,
+                Slot::PairI(k) => self.pair_dr[k as usize][0] = d,
+                Slot::PairJ(k) => self.pair_dr[k as usize][1] = d,
                 Slot::Wall(k) => self.wc[k as usize].dr = d,
             }
         }
@@ -1055,25 +1057,45 @@ impl World {
         let batched = !self.liggghts_radii
             && self.coeffs.iter().all(|c| c.tangential == Tangential::History)
             && PairLanes::vectorised();
-        if self.parallel && self.pairs.len() >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
+        let np = self.pairs.len();
+        if !mc && (self.pair_dr_dirty || self.pair_dr.len() != np) {
+            self.pair_dr.clear();
+            self.pair_dr.resize(np, [0.0; 2]);
+            self.pair_dr_dirty = false;
+        }
+        // Every entry is overwritten below: only the length has to match (no per-step fill).
+        if self.pair_force.len() != np {
+            self.pair_force.resize(np, Vec3::zeros());
+        }
+        if self.parallel && np >= PARALLEL_MIN_PAIRS && rayon::current_num_threads() > 1 {
             use rayon::prelude::*;
-            // Every entry is overwritten below: only the length has to match (no per-step fill).
-            if self.pair_out.len() != self.pairs.len() {
-                self.pair_out.resize(self.pairs.len(), PairOut::default());
+            if self.pair_out.len() != np {
+                self.pair_out.resize(np, PairOut::default());
             }
+            let chunks = self
+                .pairs
+                .par_chunks_mut(PARALLEL_CHUNK)
+                .zip(self.pair_dr.par_chunks(PARALLEL_CHUNK))
+                .zip(self.pair_out.par_chunks_mut(PARALLEL_CHUNK))
+                .zip(self.pair_force.par_chunks_mut(PARALLEL_CHUNK));
             if batched {
-                self.pairs
-                    .par_chunks_mut(PARALLEL_CHUNK)
-                    .zip(self.pair_out.par_chunks_mut(PARALLEL_CHUNK))
-                    .try_for_each(|(prs, outs)| ctx.eval_batched(prs, outs))
+                chunks
+                    .try_for_each(|(((prs, drs), outs), force)| {
+                        ctx.eval_batched(prs, drs, &mut Keep { outs, force })
+                    })
                     .map_err(|e| *e)?;
             } else {
-                self.pairs
-                    .par_iter_mut()
-                    .zip(self.pair_out.par_iter_mut())
-                    .with_min_len(PARALLEL_CHUNK)
-                    .try_for_each(|(pr, out)| ctx.eval(pr, out))
-                    .map_err(|e| *e)?;
+                chunks
+                    .try_for_each(|(((prs, drs), outs), force)| {
+                        let mut keep = Keep { outs, force };
+                        for (k, (pr, dr)) in prs.iter_mut().zip(drs).enumerate() {
+                            let mut o = PairOut::default();
+                            ctx.eval(pr, *dr, &mut o)?;
+                            keep.put(k, pr.i as usize, pr.j as usize, &o);
+                        }
+                        Ok(())
+                    })
+                    .map_err(|e: Box<StepError>| *e)?;
             }
             if self.inc_start.len() != n + 1 || self.inc.len() != 2 * self.pairs.len() {
                 // Built at every neighbour build; particles added since have none yet.
@@ -1113,13 +1135,13 @@ impl World {
             f.resize(n, Vec3::zeros());
             torque.clear();
             torque.resize(n, Vec3::zeros());
-            let mut sums = SumInto { f, torque };
+            let mut sums = SumInto { f, torque, force: &mut self.pair_force };
             if batched {
-                ctx.eval_batched(&mut self.pairs, &mut sums).map_err(|e| *e)?;
+                ctx.eval_batched(&mut self.pairs, &self.pair_dr, &mut sums).map_err(|e| *e)?;
             } else {
                 let mut o = PairOut::default();
-                for (k, pr) in self.pairs.iter_mut().enumerate() {
-                    ctx.eval(pr, &mut o).map_err(|e| *e)?;
+                for (k, (pr, dr)) in self.pairs.iter_mut().zip(&self.pair_dr).enumerate() {
+                    ctx.eval(pr, *dr, &mut o).map_err(|e| *e)?;
                     sums.put(k, pr.i as usize, pr.j as usize, &o);
                 }
             }
@@ -1245,13 +1267,13 @@ impl World {
         let mut sk = [[0.0; 3]; 3];
         let Some(domain) = self.domain else { return (sc, sk) };
         let vol = domain.volume();
-        for pr in &self.pairs {
-            if pr.force == Vec3::zeros() {
+        for (pr, force) in self.pairs.iter().zip(&self.pair_force) {
+            if *force == Vec3::zeros() {
                 continue;
             }
             let mut d = self.p.x[pr.i as usize] - self.p.x[pr.j as usize];
             domain.minimum_image(&mut d);
-            add_outer(&mut sc, &d, &(pr.force / vol));
+            add_outer(&mut sc, &d, &(force / vol));
         }
         for i in 0..self.p.len() {
             let mut v = self.p.v[i];
@@ -1261,12 +1283,13 @@ impl World {
         (sc, sk)
     }
 
+    /// Every touching particle–particle contact with what `compute pair/gran/local` reports.
     /// Re-evaluates every pair at the current positions and velocities without advancing contact
     /// histories or touching particle forces: per-contact output at the end of a step sees the
     /// full-step velocities, as LIGGGHTS's `compute pair/gran/local` (which calls the pair style
     /// again with history updates off) does.
-    pub fn evaluate_pair_outputs(&mut self) -> Result<(), StepError> {
-        let Some(domain) = self.domain else { return Ok(()) };
+    pub fn touching_pairs(&mut self) -> Result<Vec<PairContact>, StepError> {
+        let Some(domain) = self.domain else { return Ok(Vec::new()) };
         let ctx = PairCtx {
             p: &self.p,
             coeffs: &self.coeffs,
@@ -1277,31 +1300,25 @@ impl World {
             step: self.step,
             liggghts_radii: self.liggghts_radii,
         };
+        let mut out = Vec::new();
         let mut o = PairOut::default();
-        for pr in self.pairs.iter_mut() {
-            ctx.eval(pr, &mut o).map_err(|e| *e)?;
-        }
-        Ok(())
-    }
-
-    /// Every particle–particle contact carrying a force at the last force pass, with what
-    /// `compute pair/gran/local` reports.
-    pub fn touching_pairs(&self) -> impl Iterator<Item = PairContact> + '_ {
-        let domain = self.domain;
-        self.pairs.iter().filter(|p| p.force != Vec3::zeros()).map(move |p| {
-            let (i, j) = (p.i as usize, p.j as usize);
+        for (pr, dr) in self.pairs.iter_mut().zip(&self.pair_dr) {
+            ctx.eval(pr, *dr, &mut o).map_err(|e| *e)?;
+            if o.force == Vec3::zeros() {
+                continue;
+            }
+            let (i, j) = (pr.i as usize, pr.j as usize);
             let raw = self.p.x[i] - self.p.x[j];
             let mut branch = raw;
-            if let Some(d) = domain {
-                d.minimum_image(&mut branch);
-            }
-            PairContact { i, j, branch, periodic: branch != raw, force: p.force, torque: p.torque }
-        })
+            domain.minimum_image(&mut branch);
+            out.push(PairContact { i, j, branch, periodic: branch != raw, force: o.force, torque: o.torque_i });
+        }
+        Ok(out)
     }
 
     /// Particle–particle contacts carrying a force at the last force pass (set-up pass included).
     pub fn pair_contacts(&self) -> usize {
-        self.pairs.iter().filter(|p| p.force != Vec3::zeros()).count()
+        self.pair_force.iter().filter(|f| **f != Vec3::zeros()).count()
     }
 
     pub fn contact_counts(&self) -> (usize, usize) {
@@ -1389,35 +1406,35 @@ impl PairCtx<'_> {
     /// Force on i and torques on i and j of one pair into `out` (`touching` false when apart);
     /// updates the pair's history when `update`.
     #[inline]
-    fn eval(&self, pr: &mut Pair, out: &mut PairOut) -> Result<(), Box<StepError>> {
-        let Some((d, kimg)) = self.approach(pr) else {
-            out.touching = false;
+    fn eval(&self, pr: &mut Pair, dr: PairDr, out: &mut PairOut) -> Result<(), Box<StepError>> {
+        let Some((d, kimg)) = self.approach(pr, dr) else {
+            *out = PairOut::default();
             return Ok(());
         };
         let p = self.p;
         let (i, j) = (pr.i as usize, pr.j as usize);
-        let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
+        let (ri, rj) = (p.radius[i] + dr[0], p.radius[j] + dr[1]);
         let bi = Body { x: p.x[i], v: p.v[i], omega: p.omega[i], radius: p.radius[i], mass: p.mass[i] };
         // The image of j across a sheared boundary carries the Lees–Edwards velocity jump.
         let mut vj = p.v[j];
         vj.x += kimg * self.domain.le_vjump;
         let mut bj = Body { x: p.x[i] - d, v: vj, omega: p.omega[j], radius: p.radius[j], mass: p.mass[j] };
-        let mut dri = pr.dri;
+        let mut dri = dr[0];
         let mut ri_stored = ri;
-        if self.liggghts_radii && pr.dri != 0.0 {
+        if self.liggghts_radii && dr[0] != 0.0 {
             // LIGGGHTS 3.8 `surface multicontact` keeps particle i's original radius in R_eff and
             // in its lever arm (only the overlap sees r_i + Δ). Same effect through the physics
             // core: original r_i, and j moved Δ_i closer along the normal.
             let r = d.norm();
-            if r > pr.dri {
-                bj.x = p.x[i] - d * ((r - pr.dri) / r);
+            if r > dr[0] {
+                bj.x = p.x[i] - d * ((r - dr[0]) / r);
                 dri = 0.0;
                 ri_stored = p.radius[i];
             }
         }
         let c = &self.coeffs[p.typ[i] * self.nt + p.typ[j]];
         let mut shear = pr.shear;
-        let r = particle_particle(c, &bi, &bj, dri, pr.drj, self.dt, &mut shear)
+        let r = particle_particle(c, &bi, &bj, dri, dr[1], self.dt, &mut shear)
             .map_err(|e| Box::new(contact_error(self.step, p.id[i], Some(p.id[j]), e)))?;
         let fnorm = match r {
             Some(cf) => {
@@ -1434,8 +1451,6 @@ impl PairCtx<'_> {
                 0.0
             }
         };
-        pr.force = out.force;
-        pr.torque = out.torque_i;
         if self.update {
             pr.shear = shear;
             pr.fn_prev = fnorm;
@@ -1447,22 +1462,19 @@ impl PairCtx<'_> {
 
     /// What both pair passes do first: the centre difference d = x_i − x_j (minimum image) and
     /// the image count across a sheared boundary, and the `near` flag. A pair whose modified
-    /// spheres are apart gets its outputs and history reset, and `None`.
+    /// spheres are apart gets its history reset, and `None`.
     #[inline(always)]
-    fn approach(&self, pr: &mut Pair) -> Option<(Vec3, f64)> {
+    fn approach(&self, pr: &mut Pair, dr: PairDr) -> Option<(Vec3, f64)> {
         let p = self.p;
         let (i, j) = (pr.i as usize, pr.j as usize);
         let mut d = p.x[i] - p.x[j];
         let kimg = self.domain.minimum_image_k(&mut d);
-        let (ri, rj) = (p.radius[i] + pr.dri, p.radius[j] + pr.drj);
+        let (ri, rj) = (p.radius[i] + dr[0], p.radius[j] + dr[1]);
         let radsum = ri + rj;
         let d2 = d.norm_squared();
         let reach = (1.0 + RECEIVER_GAP) * (p.radius[i] + p.radius[j]);
         pr.near = d2 < reach * reach;
         if d2 >= radsum * radsum {
-            // The force is output, not history: the set-up pass records it too.
-            pr.force = Vec3::zeros();
-            pr.torque = Vec3::zeros();
             if self.update {
                 pr.shear = Vec3::zeros();
                 pr.fn_prev = 0.0;
@@ -1481,15 +1493,18 @@ trait PairSink {
     fn put(&mut self, k: usize, i: usize, j: usize, o: &PairOut);
 }
 
-/// Serial pass: forces and torques straight into the per-particle sums.
+/// Serial pass: forces and torques straight into the per-particle sums; each pair's force
+/// recorded for the outputs.
 struct SumInto<'a> {
     f: &'a mut [Vec3],
     torque: &'a mut [Vec3],
+    force: &'a mut [Vec3],
 }
 
 impl PairSink for SumInto<'_> {
     #[inline(always)]
-    fn put(&mut self, _k: usize, i: usize, j: usize, o: &PairOut) {
+    fn put(&mut self, k: usize, i: usize, j: usize, o: &PairOut) {
+        self.force[k] = o.force;
         if o.touching {
             self.f[i] += o.force;
             self.f[j] -= o.force;
@@ -1499,11 +1514,18 @@ impl PairSink for SumInto<'_> {
     }
 }
 
-/// Threaded pass: each pair's result kept for the ordered sum afterwards.
-impl PairSink for [PairOut] {
+/// Threaded pass: each pair's result kept for the ordered sum afterwards, and its force recorded
+/// for the outputs.
+struct Keep<'a> {
+    outs: &'a mut [PairOut],
+    force: &'a mut [Vec3],
+}
+
+impl PairSink for Keep<'_> {
     #[inline(always)]
     fn put(&mut self, k: usize, _i: usize, _j: usize, o: &PairOut) {
-        self[k] = *o;
+        self.outs[k] = *o;
+        self.force[k] = o.force;
     }
 }
 
@@ -1514,16 +1536,18 @@ impl PairCtx<'_> {
     fn eval_batched(
         &self,
         pairs: &mut [Pair],
-        sink: &mut (impl PairSink + ?Sized),
+        drs: &[PairDr],
+        sink: &mut impl PairSink,
     ) -> Result<(), Box<StepError>> {
         let p = self.p;
         let mut lanes = PairLanes::default();
         let mut slot = [0usize; LANES];
         let mut n = 0;
+        let drs = &drs[..pairs.len()];
         for k in 0..pairs.len() {
-            let pr = &mut pairs[k];
+            let (pr, dr) = (&mut pairs[k], drs[k]);
             let (i, j) = (pr.i as usize, pr.j as usize);
-            let Some((d, kimg)) = self.approach(pr) else {
+            let Some((d, kimg)) = self.approach(pr, dr) else {
                 sink.put(k, i, j, &PairOut::default());
                 continue;
             };
@@ -1541,8 +1565,8 @@ impl PairCtx<'_> {
             }
             lanes.radius_i[l] = p.radius[i];
             lanes.radius_j[l] = p.radius[j];
-            lanes.dri[l] = pr.dri;
-            lanes.drj[l] = pr.drj;
+            lanes.dri[l] = dr[0];
+            lanes.drj[l] = dr[1];
             lanes.mass_i[l] = p.mass[i];
             lanes.mass_j[l] = p.mass[j];
             lanes.e_star[l] = c.e_star;
@@ -1553,13 +1577,13 @@ impl PairCtx<'_> {
             slot[n] = k;
             n += 1;
             if n == LANES {
-                self.flush(&mut lanes, &slot[..n], pairs, sink)?;
+                self.flush(&mut lanes, &slot[..n], pairs, drs, sink)?;
                 n = 0;
             }
         }
         if n > 0 {
             lanes.pad_from_first(n);
-            self.flush(&mut lanes, &slot[..n], pairs, sink)?;
+            self.flush(&mut lanes, &slot[..n], pairs, drs, sink)?;
         }
         Ok(())
     }
@@ -1570,7 +1594,8 @@ impl PairCtx<'_> {
         lanes: &mut PairLanes,
         slot: &[usize],
         pairs: &mut [Pair],
-        sink: &mut (impl PairSink + ?Sized),
+        drs: &[PairDr],
+        sink: &mut impl PairSink,
     ) -> Result<(), Box<StepError>> {
         lanes.evaluate(self.dt);
         for (l, &k) in slot.iter().enumerate() {
@@ -1578,7 +1603,7 @@ impl PairCtx<'_> {
             if !lanes.ok[l] {
                 // The pair-by-pair path names the cause (its history is still the step's input).
                 let mut o = PairOut::default();
-                self.eval(pr, &mut o)?;
+                self.eval(pr, drs[k], &mut o)?;
                 let (i, j) = (pr.i as usize, pr.j as usize);
                 return Err(Box::new(contact_error(
                     self.step,
@@ -1594,8 +1619,6 @@ impl PairCtx<'_> {
                 torque_i: lane(&lanes.torque_i),
                 torque_j: lane(&lanes.torque_j),
             };
-            pr.force = o.force;
-            pr.torque = o.torque_i;
             if self.update {
                 pr.shear = lane(&lanes.shear);
                 pr.fn_prev = lanes.fnorm[l];
