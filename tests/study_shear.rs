@@ -116,7 +116,9 @@ fn eq8_fit_recovers_synthetic_power_laws_with_shared_phi_c() {
 #[test]
 fn sub_grid_filters_name_bad_values() {
     let dir = tempfile::tempdir().unwrap();
-    for (arg, words) in [("--nu=0.7", "Poisson ratio"), ("--mu=-0.1", "friction coefficient"), ("--mu=0,nan", "friction")] {
+    for (arg, words) in
+        [("--nu=0.7", "Poisson ratio"), ("--mu=-0.1", "friction coefficient"), ("--mu=0,nan", "friction")]
+    {
         let out = assert_cmd::Command::cargo_bin("mcdem")
             .unwrap()
             .args(["study", "shear", "--grid", "quick", "--no-cost", arg, "--out"])

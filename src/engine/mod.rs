@@ -956,7 +956,8 @@ impl World {
         // spheres' surfaces along the centre line when loaded, else each particle's own surface
         // point.
         let mut stale = false;
-        for ((pr, m), load) in self.pairs.iter().zip(self.pair_mc.iter_mut()).zip(self.pair_loads.iter_mut()) {
+        for ((pr, m), load) in self.pairs.iter().zip(self.pair_mc.iter_mut()).zip(self.pair_loads.iter_mut())
+        {
             let now = pr.fn_prev > 0.0 || pr.near;
             if *m != now {
                 *m = now;
@@ -1311,7 +1312,14 @@ impl World {
             let raw = self.p.x[i] - self.p.x[j];
             let mut branch = raw;
             domain.minimum_image(&mut branch);
-            out.push(PairContact { i, j, branch, periodic: branch != raw, force: o.force, torque: o.torque_i });
+            out.push(PairContact {
+                i,
+                j,
+                branch,
+                periodic: branch != raw,
+                force: o.force,
+                torque: o.torque_i,
+            });
         }
         Ok(out)
     }
