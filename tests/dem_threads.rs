@@ -54,3 +54,29 @@ fn two_threads_give_the_serial_result_bit_for_bit() {
         assert!(serial == parallel, "law {law}, geomtol {geomtol}: two threads changed the piston force");
     }
 }
+
+/// The recorded pair forces behind the stress and coordination outputs are the same whichever
+/// pass computed them: a dense frictional packing (the bench's, 2048 spheres), a few steps on one
+/// and on two threads, Hertz and advanced MC.
+#[test]
+fn stress_and_coordination_do_not_depend_on_the_thread_count() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    for advanced in [false, true] {
+        let run = |threads: PairThreads| {
+            let mut w = mcdem::bench::packing::scene(8, advanced).unwrap();
+            w.pair_threads = threads;
+            pool.install(|| {
+                w.setup().unwrap();
+                for _ in 0..20 {
+                    w.step().unwrap();
+                }
+            });
+            (w.stress_parts(), w.pair_contacts())
+        };
+        let (serial, parallel) = (run(PairThreads::Serial), run(PairThreads::Parallel));
+        let ((sc, _), z) = serial;
+        assert!(z > 2048 * 4, "advanced {advanced}: the packing must be dense ({z} contacts)");
+        assert!(sc[0][0] > 0.0 && sc[1][1] > 0.0 && sc[2][2] > 0.0, "advanced {advanced}: {sc:?}");
+        assert!(serial == parallel, "advanced {advanced}: {serial:?} vs {parallel:?}");
+    }
+}
