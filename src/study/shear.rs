@@ -1270,6 +1270,15 @@ fn report(
     let p = &g.protocol;
     let mut s = String::new();
     let _ = writeln!(s, "# Simple shear study ({} grid)\n", g.name);
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(", ");
+    let _ = writeln!(
+        s,
+        "Grid: φ ∈ {{{}}}, μ ∈ {{{}}}, ν ∈ {{{}}}, γ̂ ∈ {{{}}}.\n",
+        list(&g.phis),
+        list(&g.mus),
+        list(&g.nus),
+        list(&g.gamma_hats)
+    );
     let _ = writeln!(
         s,
         "Advanced MC ({}, abs test), E = {} Pa, ρ = {} kg/m³, d = {} m, e = {}, N = {}. \
