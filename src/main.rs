@@ -167,10 +167,11 @@ fn study(s: Study) -> Result<(), String> {
             if let Some(n) = n {
                 g.n = n;
             }
-            if let Some(m) = mu.iter().find(|m| !(m.is_finite() && **m >= 0.0)) {
+            use mcdem::physics::material::{check_friction, check_poisson_ratio};
+            if let Some(m) = mu.iter().find(|m| check_friction(**m).is_err()) {
                 return Err(format!("--mu {m}: a friction coefficient must be finite and >= 0"));
             }
-            if let Some(v) = nu.iter().find(|v| !(0.0..=0.5).contains(*v)) {
+            if let Some(v) = nu.iter().find(|v| check_poisson_ratio(**v).is_err()) {
                 return Err(format!("--nu {v}: a Poisson ratio must lie in [0, 0.5]"));
             }
             if !mu.is_empty() {

@@ -53,8 +53,12 @@ pub(crate) fn check_youngs_modulus(e: f64) -> Result<f64, MaterialError> {
     check("youngs_modulus", e, "finite and > 0", |v| v > 0.0)
 }
 
-pub(crate) fn check_poisson_ratio(nu: f64) -> Result<f64, MaterialError> {
+pub fn check_poisson_ratio(nu: f64) -> Result<f64, MaterialError> {
     check("poisson_ratio", nu, "finite and in [0, 0.5]", |v| (0.0..=0.5).contains(&v))
+}
+
+pub fn check_friction(mu: f64) -> Result<f64, MaterialError> {
+    check("coefficientFriction", mu, "finite and >= 0", |v| v >= 0.0)
 }
 
 pub(crate) fn check_gamma(gamma: f64) -> Result<f64, MaterialError> {
@@ -117,7 +121,7 @@ impl PairCoeffs {
     pub fn new(mi: &Material, mj: &Material, restitution: f64, friction: f64) -> Result<Self, MaterialError> {
         let e =
             check("coefficientRestitution", restitution, "finite and in (0, 1]", |v| v > 0.0 && v <= 1.0)?;
-        let mu = check("coefficientFriction", friction, "finite and >= 0", |v| v >= 0.0)?;
+        let mu = check_friction(friction)?;
         let (ei, ni) = (mi.youngs_modulus, mi.poisson_ratio);
         let (ej, nj) = (mj.youngs_modulus, mj.poisson_ratio);
         let e_star = 1.0 / ((1.0 - ni * ni) / ei + (1.0 - nj * nj) / ej);
