@@ -376,7 +376,7 @@ pub struct World {
     /// number of contacts changed: an approximation whose error `mcdem bench` reports next to its speed.
     pub mc_geometry_tolerance: f64,
     /// Spatial sorting (LAMMPS `atom_modify sort`): at the first neighbour build at least this
-    /// many steps after the last sort, particles are reordered along a Morton curve of cells, so
+    /// many steps after the last sort, particles are renumbered bin by bin in row-major order, so
     /// that particles close in space are close in memory and the pair loop stays in cache as N
     /// grows. 0 (the default of the library API, which keeps indices stable): never. Decks get
     /// LAMMPS' 1000.
@@ -759,11 +759,19 @@ impl World {
         }
     }
 
-    /// Reorders the particles along a Morton (Z-order) curve of cells half a neighbour cutoff wide
-    /// and remaps everything keyed by particle index: pair history (a pair whose indices change
-    /// order is turned round), wall contacts and kept influence matrices. Positions must be
-    /// inside the box (called after the periodic wrap) and `cut_build` current. The physics is
-    /// unchanged; only summation orders, hence round-off, differ from an unsorted run.
+    /// Renumbers the particles bin by bin in row-major order (x fastest, as LAMMPS' `atom_modify
+    /// sort`), bins half a neighbour cutoff wide, and remaps everything keyed by particle index:
+    /// pair history (a pair whose indices change order is turned round), wall contacts and kept
+    /// influence matrices. Positions must be inside the box (called after the periodic wrap) and
+    /// `cut_build` current. The physics is unchanged; only summation orders, hence round-off,
+    /// differ from an unsorted run.
+    ///
+    /// Why row-major and not a space-filling curve: the pair loop walks particle i in index order
+    /// and touches each partner j > i. In row-major order every partner lies at most about one
+    /// xy-layer of bins ahead (N^(2/3) particles), and the partners' indices rise steadily with i,
+    /// so the hardware prefetcher follows them. A Morton order keeps most partners closer but
+    /// sends a fraction across its coarse blocks, up to N/2 ahead, and each of those loads misses
+    /// the cache: on the 97 556-particle packing it measured 20-25 % slower per particle-step.
     fn sort_spatially(&mut self, domain: &Domain) {
         let n = self.p.len();
         if n < 2 {
@@ -771,19 +779,17 @@ impl World {
         }
         let bin = 0.5 * (self.cut_build + self.skin);
         let len = domain.hi - domain.lo;
-        // 21 bits per axis fit a 63-bit key; coarser bins only for absurdly large boxes.
+        // Bins per axis; coarser bins only for absurdly large boxes (the key must fit 64 bits).
         let bins = |a: usize| ((len[a] / bin).ceil().clamp(1.0, (1u64 << 21) as f64)) as u64;
         let nb = [bins(0), bins(1), bins(2)];
         let mut keys: Vec<(u64, u32)> = (0..n)
             .map(|i| {
                 let x = self.p.x[i];
-                let mut code = 0u64;
-                for a in 0..3 {
+                let b = |a: usize| {
                     let s = ((x[a] - domain.lo[a]) / len[a]).clamp(0.0, 1.0);
-                    let b = ((s * nb[a] as f64) as u64).min(nb[a] - 1);
-                    code |= spread_bits(b) << a;
-                }
-                (code, i as u32)
+                    ((s * nb[a] as f64) as u64).min(nb[a] - 1)
+                };
+                ((b(2) * nb[1] + b(1)) * nb[0] + b(0), i as u32)
             })
             .collect();
         keys.sort_unstable();
@@ -1765,17 +1771,6 @@ impl McCtx<'_> {
             Ok(counts)
         })
     }
-}
-
-/// The bits of `v` (up to 21) spread to every third bit: one axis of a 3-D Morton code.
-fn spread_bits(v: u64) -> u64 {
-    let mut x = v & 0x1f_ffff;
-    x = (x | x << 32) & 0x1f_0000_0000_ffff;
-    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
-    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-    x = (x | x << 2) & 0x1249_2492_4924_9249;
-    x
 }
 
 /// s += u ⊗ w.
