@@ -133,3 +133,29 @@ fn sub_grid_filters_name_bad_values() {
     // Nothing ran: the output directory holds no run.
     assert!(!dir.path().join("runs").exists());
 }
+
+#[test]
+fn response_surface_has_rows_only_where_runs_finished() {
+    // The recorded N = 2000 runs at μ = 0.1 (ν = 0.25 and 0.5 only) against the full grid's six ν:
+    // the two ν that ran get a fitted row, the four that did not get none (no NaN row).
+    use mcdem::study::shear::response_surface;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("validation/shear_full/runs");
+    let mut results: Vec<RunResult> = Vec::new();
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.contains("_mu0.100_") && name.ends_with(".json") {
+            results.push(serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap());
+        }
+    }
+    assert!(results.len() >= 30, "{} recorded runs at mu = 0.1", results.len());
+    let mut grid = Grid::full();
+    grid.mus = vec![0.1];
+    let (rows, phi_c) = response_surface(&grid, &results);
+    let nus: Vec<f64> = rows.iter().map(|r| r.nu).collect();
+    assert_eq!(nus, vec![0.25, 0.5]);
+    for r in &rows {
+        assert!(r.points >= 3 && r.alpha.is_finite() && r.beta.is_finite(), "{r:?}");
+    }
+    assert_eq!(phi_c.len(), 1);
+}

@@ -949,6 +949,12 @@ pub fn response_surface(
             phi_c.insert(format!("{mu}"), (*pc, floor));
         }
         for (nu, set) in &sets {
+            // A sub-grid study leaves some (μ, ν) of the grid without a finished run: no row (their
+            // stopped runs are listed in the report; a (μ, ν) with finished runs but no quasi-static
+            // point still gets its row, with 0 points).
+            if !results.iter().any(|r| key3(r.spec.mu) == key3(mu) && key3(r.spec.nu) == key3(*nu)) {
+                continue;
+            }
             let (a_p, b_p) = paper_values(mu, *nu).unwrap_or((f64::NAN, f64::NAN));
             let mut row = SurfaceRow {
                 mu,
