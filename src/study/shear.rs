@@ -934,6 +934,11 @@ pub fn response_surface(
     results: &[RunResult],
 ) -> (Vec<SurfaceRow>, BTreeMap<String, (f64, f64)>) {
     let pts = qs_points(results);
+    // (μ, ν) with at least one finished run: a sub-grid study leaves the others without a row
+    // (their stopped runs are listed in the report; a (μ, ν) with finished runs but no
+    // quasi-static point still gets its row, with 0 points).
+    let ran: std::collections::BTreeSet<(i64, i64)> =
+        results.iter().map(|r| (key3(r.spec.mu), key3(r.spec.nu))).collect();
     let mut rows = Vec::new();
     let mut phi_c = BTreeMap::new();
     for &mu in &grid.mus {
@@ -949,10 +954,7 @@ pub fn response_surface(
             phi_c.insert(format!("{mu}"), (*pc, floor));
         }
         for (nu, set) in &sets {
-            // A sub-grid study leaves some (μ, ν) of the grid without a finished run: no row (their
-            // stopped runs are listed in the report; a (μ, ν) with finished runs but no quasi-static
-            // point still gets its row, with 0 points).
-            if !results.iter().any(|r| key3(r.spec.mu) == key3(mu) && key3(r.spec.nu) == key3(*nu)) {
+            if !ran.contains(&(key3(mu), key3(*nu))) {
                 continue;
             }
             let (a_p, b_p) = paper_values(mu, *nu).unwrap_or((f64::NAN, f64::NAN));
