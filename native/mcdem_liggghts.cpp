@@ -154,6 +154,29 @@ private:
     double *target_;
 };
 
+// A whole number of steps >= 1 (`updateEvery 10`), parsed strictly for the same reason.
+class StepCountSetting : public Setting {
+public:
+    StepCountSetting(const char *name, int *target) : Setting(name, 1), target_(target) {}
+    int parseArguments(char **args) {
+        if (name != args[0]) return 0;
+        const char *v = args[1];
+        char *end = NULL;
+        const long k = v ? std::strtol(v, &end, 10) : 0;
+        if (!v || end == v || *end != '\0' || k < 1 || k > 1000000000L) {
+            error_message = "model mc_advanced: " + name + " must be a whole number of steps >= 1, got '" +
+                            (v ? v : "") + "'";
+            return -1;
+        }
+        *target_ = static_cast<int>(k);
+        return 2;
+    }
+    void print_value(FILE *out) { std::fprintf(out, "%d", *target_); }
+
+private:
+    int *target_;
+};
+
 std::string last_mcdem_error() {
     char buf[512];
     mcdem_last_error(buf, sizeof(buf));
@@ -212,6 +235,8 @@ public:
           signed_test_(false),
           stock_pair_radii_(false),
           geometry_tolerance_(0.0),
+          update_every_(1),
+          last_update_(-1),
           cache_(NULL),
           ntypes_(0),
           sources_ready_(false) {
@@ -243,6 +268,8 @@ public:
             table["pairRadii"] = new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_);
         if (table.find("geometryTolerance") == table.end())
             table["geometryTolerance"] = new NonNegativeSetting("geometryTolerance", &geometry_tolerance_);
+        if (table.find("updateEvery") == table.end())
+            table["updateEvery"] = new StepCountSetting("updateEvery", &update_every_);
     }
 
     void postSettings(IContactHistorySetup *, ContactModelBase *) {
@@ -295,6 +322,14 @@ public:
         // complete (walls included) and nothing has used radii yet, so the radius changes of this
         // step are computed here. Passes that only collect data (computeflag 0) reuse them.
         if (cmb_->is_wall() || !sidata.computeflag) return;
+        // `updateEvery K`: between updates the stores keep the last radius changes. A neighbour
+        // build (every run's set-up included) exchanges and re-sorts atoms and re-points the wall
+        // rows, so a step with a build always updates.
+        const bigint now = update->ntimestep;
+        if (update_every_ > 1 && last_update_ >= 0 && now > last_update_ && now - last_update_ < update_every_ &&
+            neighbor->lastcall <= last_update_ && neighbor->lastcall < now)
+            return;
+        last_update_ = now;
         update_radius_changes();
     }
 
@@ -656,6 +691,9 @@ private:
     // `geometryTolerance TOL` (> 0): each particle's influence matrix is kept in cache_ (slot = local
     // index) until one of its contact points moved more than TOL x radius; 0 is the exact kernel.
     double geometry_tolerance_;
+    // `updateEvery K`: radius changes recomputed every K steps and at neighbour builds (1: every step).
+    int update_every_;
+    bigint last_update_;
     mcdem_influence_cache *cache_;
     int ntypes_;
     std::vector<mcdem_mc_params> params_;

@@ -38,6 +38,11 @@ enum Command {
         /// an approximation that trades accuracy for speed, see docs/dem.md)
         #[arg(long, default_value_t = 0.0)]
         mc_geometry_tolerance: f64,
+        /// Multi-contact update interval in steps: recompute the radius changes every K steps and
+        /// at neighbour-list builds, keep them in between (default: the deck's `updateEvery`, else
+        /// 1 = every step, exact; an approximation that trades accuracy for speed, see docs/dem.md)
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        mc_update_every: Option<u64>,
     },
     /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path
     Nonlocal {
@@ -255,6 +260,7 @@ fn run(
     log: Option<PathBuf>,
     no_progress: bool,
     mc_geometry_tolerance: f64,
+    mc_update_every: Option<u64>,
 ) -> Result<(), String> {
     if !(mc_geometry_tolerance.is_finite() && mc_geometry_tolerance >= 0.0) {
         return Err(format!(
@@ -268,6 +274,7 @@ fn run(
         progress: !no_progress,
         quiet: false,
         mc_geometry_tolerance,
+        mc_every: mc_update_every.unwrap_or(0),
         ..Default::default()
     };
     mcdem::deck::run_file(&deck, &opts).map(|_| ()).map_err(|e| format!("ERROR: {e}"))
@@ -405,8 +412,8 @@ fn main() -> ExitCode {
         // The time loop runs on a worker of the thread pool: the pair loop's parallel halves then
         // start on this thread while the other worker is still spinning from the previous step,
         // instead of a blocked caller waking sleeping workers every step.
-        Command::Run { deck, var, log, no_progress, mc_geometry_tolerance } => {
-            rayon::scope(|_| run(deck, var, log, no_progress, mc_geometry_tolerance))
+        Command::Run { deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every } => {
+            rayon::scope(|_| run(deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every))
         }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json, scenes } => bench(quick, json, scenes),

@@ -48,13 +48,15 @@ fn quick_bench_writes_rows_and_ratios() {
         }
         assert!(ratios.contains_key("rust 1 thread: mc_advanced / hertz"));
         // The approximate rows carry their accuracy: a finite error against the exact run, below
-        // the bound the tolerance sets (docs/dem.md: 6e-5 and 6e-4 of the force range measured).
+        // the bound the setting sets (docs/dem.md, full-speed deck: 6e-5 and 6e-4 of the force range
+        // at tolerances 1e-4 and 1e-3; 6.8e-3 for an update every 10 steps, which lags the forces
+        // by up to 10 steps: this deck's piston is 20 times faster, so 20 times that, 0.14).
         let errors = v["errors"].as_object().unwrap();
-        for (tol, bound) in [("1e-4", 1e-3), ("1e-3", 1e-2)] {
-            let key = format!("hydrogel rust mc_advanced tol={tol}: max piston-force error / range vs exact");
+        for (model, bound) in [("tol=1e-4", 1e-3), ("tol=1e-3", 1e-2), ("every=10", 0.15)] {
+            let key = format!("hydrogel rust mc_advanced {model}: max piston-force error / range vs exact");
             let e = errors[&key].as_f64().unwrap();
-            assert!(e.is_finite() && e < bound, "{key}: {e}");
-            assert!(ratios.contains_key(&format!("rust 1 thread: mc_advanced tol={tol} / hertz")));
+            assert!(e.is_finite() && e > 0.0 && e < bound, "{key}: {e}");
+            assert!(ratios.contains_key(&format!("rust 1 thread: mc_advanced {model} / hertz")));
         }
         if std::process::Command::new("liggghts").arg("-h").output().is_ok() {
             assert!(has("liggghts", "hertz", "hydrogel_514"));

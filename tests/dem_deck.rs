@@ -99,6 +99,32 @@ fn bad_material_value_is_named() {
 }
 
 #[test]
+fn update_every_is_checked_and_belongs_to_mc_advanced() {
+    let mc = |setting: &str| {
+        BASE.replace(
+            "pair_style gran model hertz tangential history",
+            &format!(
+                "fix m5 all property/global geometricPrefactor peratomtype 0.81\n\
+                 fix m6 all property/global maxPenetrationRatio peratomtype 0.11\n\
+                 pair_style gran model mc_advanced tangential history {setting}"
+            ),
+        ) + "run 1\n"
+    };
+    let (ok, out) = run_deck(&mc("updateEvery 10"), &[]);
+    assert!(ok && out.contains("multi-contact update every 10 steps"), "{out}");
+    for bad in ["0", "2.5", "-3", "often"] {
+        let (ok, out) = run_deck(&mc(&format!("updateEvery {bad}")), &[]);
+        assert!(
+            !ok && out.contains(&format!("updateEvery must be a whole number of steps >= 1, got '{bad}'")),
+            "{out}"
+        );
+    }
+    let text = BASE.replace("tangential history", "tangential history updateEvery 10") + "run 1\n";
+    let (ok, out) = run_deck(&text, &[]);
+    assert!(!ok && out.contains("updateEvery is a setting of model mc_advanced"), "{out}");
+}
+
+#[test]
 fn atom_modify_sort_values_are_checked() {
     // Accepted: LAMMPS' form, and 0 to switch spatial sorting off.
     for ok_line in ["atom_modify map array sort 1000 0.0", "atom_modify sort 0 0"] {

@@ -165,10 +165,21 @@ fn run_engine(dir: &Path, deck: &str, vars: &[(&str, &str)]) {
 /// up at 1e-4 or more within a few hundred steps.
 #[test]
 fn engine_matches_plugin_step_by_step() {
-    let laws: [&[(&str, &str)]; 4] =
-        [&[("law", "0")], &[("law", "0"), ("mpr", "0.01")], &[("law", "0"), ("mpr", "1e9")], &[("law", "1")]];
+    let laws: [&[(&str, &str)]; 5] = [
+        &[("law", "0")],
+        &[("law", "0"), ("mpr", "0.01")],
+        &[("law", "0"), ("mpr", "1e9")],
+        &[("law", "1")],
+        // The update interval too: both engines recompute on the same steps (every K, and at
+        // neighbour builds, which follow the same rule in both).
+        &[("law", "0"), ("mcevery", "5")],
+    ];
     for deck in ["two_particles.in", "single_particle_plates.in", "bcc_box.in"] {
         for law in laws {
+            // Only two_particles.in takes the interval (through select_law.inc).
+            if law.contains(&("mcevery", "5")) && deck != "two_particles.in" {
+                continue;
+            }
             let tmp = TempDir::new().unwrap();
             let mut vars = law.to_vec();
             vars.extend([("every", "10"), ("dump", "run.dump"), ("out", "run.txt")]);
@@ -257,6 +268,8 @@ fn bad_decks_stop_with_one_error_line_naming_the_cause() {
     expect_error((two, vec![("geomtol", "small")]), d, &["geometryTolerance", "small"]);
     let deck = edited_deck(d, |t| t.replace("${mkey3} ${mval3}", "geometryTolerance -1e-3"));
     expect_error((&deck, vec![]), d, &["geometryTolerance", "-1e-3"]);
+    expect_error((two, vec![("mcevery", "0")]), d, &["updateEvery", "'0'"]);
+    expect_error((two, vec![("mcevery", "2.5")]), d, &["updateEvery", "2.5"]);
 
     let deck = edited_deck(d, |t| {
         t.replace("poissonsRatio peratomtype 0.5 0.5", "poissonsRatio peratomtype 0.6 0.5")
@@ -309,28 +322,42 @@ fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
 }
 
 #[test]
-fn hydrogel_geometry_tolerance_bounds_the_piston_force_error_in_the_plugin() {
-    // `geometryTolerance` keeps each particle's Eq. 2 geometry until a contact point moved that
-    // fraction of its radius (docs/dem.md). Two 3000-step strokes: the piston force stays within a
-    // bound set by the tolerance (6e-4 of the force range measured on the full-speed deck at 1e-3,
-    // the same as the Rust engine's), and the error shrinks with the tolerance.
+fn hydrogel_approximations_bound_the_piston_force_error_in_the_plugin() {
+    // The two approximations of the multi-contact pass (docs/dem.md), on two 3000-step strokes:
+    // - `geometryTolerance` keeps each particle's Eq. 2 geometry until a contact point moved that
+    //   fraction of its radius: 6e-4 of the force range measured on the full-speed deck at 1e-3,
+    //   the same as the Rust engine's;
+    // - `updateEvery K` recomputes the radius changes every K steps and at neighbour builds: the
+    //   radius changes lag by up to K steps, so the error grows with K (bounds as in the Rust
+    //   engine's test, tests/dem_mc_approximations.rs: this piston is ten times faster).
+    // Each error must shrink with its setting, and `updateEvery 1` is the exact run.
     let tmp = TempDir::new().unwrap();
-    let run_tol = |tol: &str| {
-        let out = format!("tol{tol}.txt");
-        let vars = [("stroke", "3000"), ("strokes", "2"), ("every", "10"), ("geomtol", tol), ("out", &out)];
+    let run_with = |tol: &str, every: &str| {
+        let out = format!("tol{tol}_every{every}.txt");
+        let vars = [
+            ("stroke", "3000"),
+            ("strokes", "2"),
+            ("every", "10"),
+            ("geomtol", tol),
+            ("mcevery", every),
+            ("out", &out),
+        ];
         run_ok(tmp.path(), "hydrogel.in", &vars);
         read_ave_time(&tmp.path().join(&out)).iter().map(|r| r[3]).collect::<Vec<f64>>()
     };
-    let exact = run_tol("0");
+    let exact = run_with("0", "1");
     let range =
         exact.iter().cloned().fold(f64::MIN, f64::max) - exact.iter().cloned().fold(f64::MAX, f64::min);
     let worst = |f: Vec<f64>| {
         assert_eq!(f.len(), exact.len());
         f.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / range
     };
-    let (e4, e3) = (worst(run_tol("1e-4")), worst(run_tol("1e-3")));
+    let (e4, e3) = (worst(run_with("1e-4", "1")), worst(run_with("1e-3", "1")));
     eprintln!("hydrogel plugin, geometry tolerance: max |dF|/range {e4:.2e} (1e-4), {e3:.2e} (1e-3)");
     assert!(e4 < 2e-4 && e3 < 2e-3 && e4 < e3, "{e4:e} (1e-4), {e3:e} (1e-3)");
+    let (k2, k5) = (worst(run_with("0", "2")), worst(run_with("0", "5")));
+    eprintln!("hydrogel plugin, update interval: max |dF|/range {k2:.2e} (every 2), {k5:.2e} (every 5)");
+    assert!(k2 > 0.0 && k2 < 1e-2 && k5 < 4e-2 && k2 < k5, "{k2:e} (every 2), {k5:e} (every 5)");
 }
 
 #[test]

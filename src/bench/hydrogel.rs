@@ -38,11 +38,6 @@ fn on_path(name: &str) -> bool {
     Command::new(name).arg("-h").output().is_ok()
 }
 
-/// Runs one deck; returns (seconds, particle-steps per second).
-fn measure(cmd: &mut Command, what: &str) -> Result<(f64, f64), String> {
-    measure_force(cmd, what).map(|(t, r, _)| (t, r))
-}
-
 /// Runs one deck; returns (seconds, particle-steps per second, piston force column of the deck's
 /// `fix ave/time` file).
 fn measure_force(cmd: &mut Command, what: &str) -> Result<(f64, f64, Vec<f64>), String> {
@@ -75,12 +70,23 @@ fn force_error(exact: &[f64], other: &[f64]) -> f64 {
     exact.iter().zip(other).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / range
 }
 
-/// Geometry tolerances of the `mc_advanced` rows beside the exact one (fractions of the radius).
-pub const TOLERANCES: [f64; 2] = [1e-4, 1e-3];
+/// The approximate `mc_advanced` rows beside the exact one: (geometry tolerance as a fraction of
+/// the radius, update interval in steps), docs/dem.md. Each runs in the Rust DEM (1 thread); the
+/// ones marked also run in the plugin.
+pub const APPROXIMATIONS: [(f64, u64, bool); 5] =
+    [(1e-4, 1, false), (1e-3, 1, true), (0.0, 10, true), (1e-3, 5, false), (1e-3, 10, true)];
 
-/// The model name of a tolerance row.
-pub fn tolerance_model(tol: f64) -> String {
-    format!("mc_advanced tol={tol:e}")
+/// The model name of an approximate row: `mc_advanced tol=1e-3`, `mc_advanced every=10`,
+/// `mc_advanced tol=1e-3 every=5`.
+pub fn approximate_model(tol: f64, every: u64) -> String {
+    let mut m = "mc_advanced".to_string();
+    if tol > 0.0 {
+        m += &format!(" tol={tol:e}");
+    }
+    if every > 1 {
+        m += &format!(" every={every}");
+    }
+    m
 }
 
 pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
@@ -128,31 +134,54 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                     .notes
                     .push("LIGGGHTS mc_advanced row skipped: build mcdem-liggghts (feature liggghts)".into());
             }
+            let mut exact = Vec::new();
             for (law, model) in LAWS {
                 let exe = if law == "0" { plugin.as_ref() } else { stock.as_ref() };
                 let Some(exe) = exe else { continue };
                 let mut c = Command::new(exe);
                 c.arg("-in").arg(&deck).args(vars(law)).args(["-log", "none"]);
-                let r = measure(&mut c, &format!("liggghts {model}"))?;
-                say(&format!("hydrogel, liggghts {model}: {:.3e} particle-steps/s", r.1));
-                push(report, "liggghts", model, 1, r);
+                let (t, rate, force) = measure_force(&mut c, &format!("liggghts {model}"))?;
+                say(&format!("hydrogel, liggghts {model}: {rate:.3e} particle-steps/s"));
+                push(report, "liggghts", model, 1, (t, rate));
+                if law == "0" {
+                    exact = force;
+                }
+            }
+            // The plugin's approximate rows, each with its piston-force error against its exact run.
+            for (tol, every, _) in APPROXIMATIONS.iter().filter(|a| a.2) {
+                let Some(exe) = plugin.as_ref() else { break };
+                let model = approximate_model(*tol, *every);
+                let mut c = Command::new(exe);
+                c.arg("-in").arg(&deck).args(vars("0")).args(["-log", "none"]);
+                c.args(["-var", "geomtol", &tol.to_string(), "-var", "mcevery", &every.to_string()]);
+                let (t, rate, force) = measure_force(&mut c, &format!("liggghts {model}"))?;
+                let err = force_error(&exact, &force);
+                say(&format!(
+                    "hydrogel, liggghts {model}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"
+                ));
+                push(report, "liggghts", &model, 1, (t, rate));
+                report.errors.insert(
+                    format!("hydrogel liggghts {model}: max piston-force error / range vs exact"),
+                    err,
+                );
             }
         }
     }
-    // Rust DEM, 1 and 2 threads; `mc_advanced` also with geometry tolerances (1 thread), each
-    // with its piston-force error against the exact run.
+    // Rust DEM, 1 and 2 threads; `mc_advanced` also approximate (1 thread), each with its
+    // piston-force error against the exact run.
     let me = std::env::current_exe().map_err(|e| e.to_string())?;
     let mut exact = Vec::new();
-    let rust = |law: &str, threads: usize, tol: f64, model: &str| {
+    let rust = |law: &str, threads: usize, (tol, every): (f64, u64), model: &str| {
         let mut c = Command::new(&me);
         c.arg("run").arg(&deck).args(vars(law)).args(["-log", "none", "--no-progress"]);
         c.arg(format!("--mc-geometry-tolerance={tol}"));
+        c.arg(format!("--mc-update-every={every}"));
         c.env("RAYON_NUM_THREADS", threads.to_string());
         measure_force(&mut c, &format!("mcdem run {model}"))
     };
     for (law, model) in LAWS {
         for threads in [1usize, 2] {
-            let (t, rate, force) = rust(law, threads, 0.0, model)?;
+            let (t, rate, force) = rust(law, threads, (0.0, 1), model)?;
             say(&format!("hydrogel, rust {model}, {threads} thread(s): {rate:.3e} particle-steps/s"));
             push(report, "rust", model, threads, (t, rate));
             if law == "0" && threads == 1 {
@@ -160,9 +189,9 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
             }
         }
     }
-    for tol in TOLERANCES {
-        let model = tolerance_model(tol);
-        let (t, rate, force) = rust("0", 1, tol, &model)?;
+    for (tol, every, _) in APPROXIMATIONS {
+        let model = approximate_model(tol, every);
+        let (t, rate, force) = rust("0", 1, (tol, every), &model)?;
         let err = force_error(&exact, &force);
         say(&format!(
             "hydrogel, rust {model}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"

@@ -111,10 +111,12 @@ fn ratios(r: &mut Report) {
             out.insert(name.to_string(), v);
         }
     }
-    for tol in hydrogel::TOLERANCES {
-        let m = hydrogel::tolerance_model(tol);
-        if let Some(v) = cost(find(r, "rust", &m, h, 1), find(r, "rust", "hertz", h, 1)) {
-            out.insert(format!("rust 1 thread: {m} / hertz"), v);
+    for (tol, every, _) in hydrogel::APPROXIMATIONS {
+        let m = hydrogel::approximate_model(tol, every);
+        for (engine, label) in [("rust", "rust 1 thread"), ("liggghts", "liggghts")] {
+            if let Some(v) = cost(find(r, engine, &m, h, 1), find(r, engine, "hertz", h, 1)) {
+                out.insert(format!("{label}: {m} / hertz"), v);
+            }
         }
     }
     // Cost per particle-step across packing sizes, relative to the smallest (1 thread).
@@ -135,12 +137,12 @@ fn ratios(r: &mut Report) {
 /// A plain-text table of the report.
 pub fn table(r: &Report) -> String {
     let mut s = format!(
-        "{:<9} {:<22} {:<28} {:>7} {:>3} {:>14} {:>10}\n",
+        "{:<9} {:<30} {:<28} {:>7} {:>3} {:>14} {:>10}\n",
         "engine", "model", "scene", "n", "thr", "particle-st/s", "wall [s]"
     );
     for x in &r.rows {
         s.push_str(&format!(
-            "{:<9} {:<22} {:<28} {:>7} {:>3} {:>14.4e} {:>10.2}{}\n",
+            "{:<9} {:<30} {:<28} {:>7} {:>3} {:>14.4e} {:>10.2}{}\n",
             x.engine,
             x.model,
             x.scene,

@@ -38,6 +38,8 @@ pub struct Options {
     pub pair_threads: crate::engine::PairThreads,
     /// Multi-contact geometry tolerance ([`crate::engine::World::mc_geometry_tolerance`]; 0 = exact).
     pub mc_geometry_tolerance: f64,
+    /// Multi-contact update interval ([`crate::engine::World::mc_every`]; 0 = the deck's, else 1).
+    pub mc_every: u64,
 }
 
 /// Runs a deck file. Errors come back as `FILE:LINE: message`.
@@ -122,6 +124,8 @@ struct GranModel {
     stock_pair_radii: bool,
     /// `geometryTolerance TOL` (mc_advanced): see `World::mc_geometry_tolerance`.
     geometry_tolerance: Option<f64>,
+    /// `updateEvery K` (mc_advanced): see `World::mc_every`.
+    update_every: Option<u64>,
 }
 
 /// `geometryTolerance` value: a finite number ≥ 0 (a fraction of the particle radius).
@@ -131,6 +135,14 @@ fn geometry_tolerance(x: &str) -> R<f64> {
         _ => Err(format!(
             "geometryTolerance must be a finite number >= 0 (a fraction of the particle radius), got '{x}'"
         )),
+    }
+}
+
+/// `updateEvery` value: a whole number of steps ≥ 1.
+fn update_every(x: &str) -> R<u64> {
+    match x.parse::<u64>() {
+        Ok(k) if k >= 1 => Ok(k),
+        _ => Err(format!("updateEvery must be a whole number of steps >= 1, got '{x}'")),
     }
 }
 
@@ -277,6 +289,7 @@ impl Deck {
         world.skin = 0.0;
         world.pair_threads = opts.pair_threads;
         world.mc_geometry_tolerance = opts.mc_geometry_tolerance;
+        world.mc_every = opts.mc_every;
         // LAMMPS sorts atoms spatially every 1000 steps unless `atom_modify sort` says otherwise.
         world.sort_every = 1000;
         Ok(Deck {
@@ -1021,6 +1034,7 @@ impl Deck {
             mpr_test: MprTest::Abs,
             stock_pair_radii: false,
             geometry_tolerance: None,
+            update_every: None,
         };
         let mut k = start;
         while k < a.len() {
@@ -1033,6 +1047,7 @@ impl Deck {
                 ("surface", Some("multicontact")) => m.surface_mc = true,
                 ("mprTest", Some(x)) => m.mpr_test = x.parse()?,
                 ("geometryTolerance", Some(x)) => m.geometry_tolerance = Some(geometry_tolerance(x)?),
+                ("updateEvery", Some(x)) => m.update_every = Some(update_every(x)?),
                 ("pairRadii", Some("modified")) => m.stock_pair_radii = false,
                 ("pairRadii", Some("stock")) => m.stock_pair_radii = true,
                 ("pairRadii", Some(x)) => {
@@ -1056,6 +1071,9 @@ impl Deck {
         if m.geometry_tolerance.is_some() && m.model != "mc_advanced" {
             return Err("geometryTolerance is a setting of model mc_advanced".into());
         }
+        if m.update_every.is_some() && m.model != "mc_advanced" {
+            return Err("updateEvery is a setting of model mc_advanced".into());
+        }
         if m.model == "mc_advanced" && m.surface_mc {
             return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
         }
@@ -1073,6 +1091,9 @@ impl Deck {
         // The command-line option, when given, takes precedence over the deck's setting.
         if let (Some(t), 0.0) = (m.geometry_tolerance, self.world.mc_geometry_tolerance) {
             self.world.mc_geometry_tolerance = t;
+        }
+        if let (Some(k), 0) = (m.update_every, self.world.mc_every) {
+            self.world.mc_every = k;
         }
         self.pair = Some(m);
         Ok(())
@@ -1301,6 +1322,9 @@ impl Deck {
                 // The pair style's multi-contact pass serves the walls too.
                 ("geometryTolerance", Some(x)) => {
                     geometry_tolerance(x)?;
+                }
+                ("updateEvery", Some(x)) => {
+                    update_every(x)?;
                 }
                 _ => return Err(unsupported(&format!("wall/gran keyword {}", a[k]))),
             }
@@ -1740,6 +1764,7 @@ impl Deck {
         let end = self.world.step + nsteps;
         let builds0 = self.world.builds;
         let updates0 = self.world.mc_influence_updates();
+        let passes0 = self.world.mc_updates;
         while self.world.step < end {
             self.world.step().map_err(|e| {
                 let m = e.to_string();
@@ -1781,6 +1806,16 @@ impl Deck {
             )
         } else {
             String::new()
+        };
+        // With an update interval: how many steps ran the full multi-contact pass.
+        let geometry = if self.world.mc_every > 1 {
+            format!(
+                "{geometry}, multi-contact update every {} steps: full pass in {} of {nsteps} steps",
+                self.world.mc_every,
+                self.world.mc_updates - passes0
+            )
+        } else {
+            geometry
         };
         self.say(&format!(
             "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} threads, {} neighbour builds{geometry})\n",
