@@ -244,7 +244,10 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
                 .into_iter()
                 .find(|f| m.model.contains(f))
                 .unwrap_or(m.model.as_str());
-            let label = format!("{family} ({engine})");
+            // The approximate passes (docs/dem.md) get their own colour: their speed is the point.
+            let approx =
+                if m.model.contains("_tol") || m.model.contains("_every") { ", approximate" } else { "" };
+            let label = format!("{family}{approx} ({engine})");
             let point = (m.wall_time_s.max(1e-4), (100.0 * e).max(1e-4));
             match series.iter_mut().find(|s: &&mut plot::Series| s.label == label) {
                 Some(s) => s.points.push(point),
