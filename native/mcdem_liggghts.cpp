@@ -129,52 +129,47 @@ private:
     bool *target_;
 };
 
-// A keyword with a number >= 0 (`geometryTolerance 1e-3`), parsed strictly: the library's own
-// DoubleSetting reads with atof, which would turn a typo into 0 without a word.
-class NonNegativeSetting : public Setting {
+// Numeric model settings parsed strictly: the library's own DoubleSetting reads with atof, which
+// would turn a typo into 0 without a word. Each parser takes the whole word or fails.
+bool parse_nonnegative(const char *v, double *out) {
+    char *end = NULL;
+    const double d = std::strtod(v, &end);
+    if (end == v || *end != '\0' || !std::isfinite(d) || d < 0.0) return false;
+    *out = d;
+    return true;
+}
+
+bool parse_step_count(const char *v, int *out) {
+    char *end = NULL;
+    const long k = std::strtol(v, &end, 10);
+    if (end == v || *end != '\0' || k < 1 || k > 1000000000L) return false;
+    *out = static_cast<int>(k);
+    return true;
+}
+
+void print_setting(FILE *out, double v) { std::fprintf(out, "%g", v); }
+void print_setting(FILE *out, int v) { std::fprintf(out, "%d", v); }
+
+// `geometryTolerance 1e-3` (a number >= 0), `updateEvery 10` (a whole number of steps >= 1).
+template <typename T, bool (*Parse)(const char *, T *)>
+class StrictSetting : public Setting {
 public:
-    NonNegativeSetting(const char *name, double *target) : Setting(name, 1), target_(target) {}
+    StrictSetting(const char *name, T *target, const char *expected)
+        : Setting(name, 1), target_(target), expected_(expected) {}
     int parseArguments(char **args) {
         if (name != args[0]) return 0;
         const char *v = args[1];
-        char *end = NULL;
-        const double d = v ? std::strtod(v, &end) : 0.0;
-        if (!v || end == v || *end != '\0' || !std::isfinite(d) || d < 0.0) {
-            error_message = "model mc_advanced: " + name +
-                            " must be a finite number >= 0 (a fraction of the particle radius), got '" +
-                            (v ? v : "") + "'";
+        if (!v || !Parse(v, target_)) {
+            error_message = "model mc_advanced: " + name + " must be " + expected_ + ", got '" + (v ? v : "") + "'";
             return -1;
         }
-        *target_ = d;
         return 2;
     }
-    void print_value(FILE *out) { std::fprintf(out, "%g", *target_); }
+    void print_value(FILE *out) { print_setting(out, *target_); }
 
 private:
-    double *target_;
-};
-
-// A whole number of steps >= 1 (`updateEvery 10`), parsed strictly for the same reason.
-class StepCountSetting : public Setting {
-public:
-    StepCountSetting(const char *name, int *target) : Setting(name, 1), target_(target) {}
-    int parseArguments(char **args) {
-        if (name != args[0]) return 0;
-        const char *v = args[1];
-        char *end = NULL;
-        const long k = v ? std::strtol(v, &end, 10) : 0;
-        if (!v || end == v || *end != '\0' || k < 1 || k > 1000000000L) {
-            error_message = "model mc_advanced: " + name + " must be a whole number of steps >= 1, got '" +
-                            (v ? v : "") + "'";
-            return -1;
-        }
-        *target_ = static_cast<int>(k);
-        return 2;
-    }
-    void print_value(FILE *out) { std::fprintf(out, "%d", *target_); }
-
-private:
-    int *target_;
+    T *target_;
+    std::string expected_;
 };
 
 std::string last_mcdem_error() {
@@ -267,9 +262,11 @@ public:
         if (table.find("pairRadii") == table.end())
             table["pairRadii"] = new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_);
         if (table.find("geometryTolerance") == table.end())
-            table["geometryTolerance"] = new NonNegativeSetting("geometryTolerance", &geometry_tolerance_);
+            table["geometryTolerance"] = new StrictSetting<double, parse_nonnegative>(
+                "geometryTolerance", &geometry_tolerance_, "a finite number >= 0 (a fraction of the particle radius)");
         if (table.find("updateEvery") == table.end())
-            table["updateEvery"] = new StepCountSetting("updateEvery", &update_every_);
+            table["updateEvery"] =
+                new StrictSetting<int, parse_step_count>("updateEvery", &update_every_, "a whole number of steps >= 1");
     }
 
     void postSettings(IContactHistorySetup *, ContactModelBase *) {

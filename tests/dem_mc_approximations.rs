@@ -41,6 +41,15 @@ fn piston_force(dir: &Path, options: &[&str]) -> (Vec<f64>, String) {
     (force, String::from_utf8(run.get_output().stdout.clone()).unwrap())
 }
 
+/// The hydrogel deck reads the liggghts-doc example's data; without it the piston tests skip.
+fn have_example() -> bool {
+    let have = Path::new(EXAMPLE_DATA).exists();
+    if !have {
+        eprintln!("skipped: needs the liggghts-doc example data");
+    }
+    have
+}
+
 /// Largest difference from `exact` over its range.
 fn worst(f: &[f64], exact: &[f64]) -> f64 {
     let range =
@@ -52,8 +61,7 @@ fn worst(f: &[f64], exact: &[f64]) -> f64 {
 
 #[test]
 fn geometry_tolerance_bounds_the_piston_force_error() {
-    if !Path::new(EXAMPLE_DATA).exists() {
-        eprintln!("skipped: needs the liggghts-doc example data");
+    if !have_example() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
@@ -70,8 +78,7 @@ fn geometry_tolerance_bounds_the_piston_force_error() {
 
 #[test]
 fn update_interval_bounds_the_piston_force_error() {
-    if !Path::new(EXAMPLE_DATA).exists() {
-        eprintln!("skipped: needs the liggghts-doc example data");
+    if !have_example() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
@@ -104,29 +111,27 @@ fn update_interval_bounds_the_piston_force_error() {
     }
 }
 
-#[test]
-fn a_zero_update_interval_is_a_clear_error() {
+/// Standard error of `mcdem run` on a small deck with these options (the run must fail).
+fn run_error(options: &[&str]) -> String {
     let out = Command::cargo_bin("mcdem")
         .unwrap()
         .arg("run")
         .arg(decks().join("two_particles.in"))
-        .args(["--mc-update-every", "0"])
+        .args(options)
         .assert()
         .failure();
-    let err = String::from_utf8(out.get_output().stderr.clone()).unwrap();
+    String::from_utf8(out.get_output().stderr.clone()).unwrap()
+}
+
+#[test]
+fn a_zero_update_interval_is_a_clear_error() {
+    let err = run_error(&["--mc-update-every", "0"]);
     assert!(err.contains("--mc-update-every"), "{err}");
 }
 
 #[test]
 fn a_negative_geometry_tolerance_is_a_clear_error() {
-    let out = Command::cargo_bin("mcdem")
-        .unwrap()
-        .arg("run")
-        .arg(decks().join("two_particles.in"))
-        .arg("--mc-geometry-tolerance=-1")
-        .assert()
-        .failure();
-    let err = String::from_utf8(out.get_output().stderr.clone()).unwrap();
+    let err = run_error(&["--mc-geometry-tolerance=-1"]);
     assert!(err.contains("--mc-geometry-tolerance must be a finite number >= 0"), "{err}");
 }
 

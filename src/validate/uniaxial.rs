@@ -419,20 +419,19 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         };
         // The speed-against-error trade of the two approximations (docs/dem.md) on the law of the
         // ordering target: two more points per ν in the speed-against-error plot.
-        let (_, te, tt) = match cal {
-            Some(m) => advanced(
-                Law { geometry_tolerance: GEOMETRY_TOLERANCE, ..m },
-                &format!("mc_advanced_tol{GEOMETRY_TOLERANCE:e}"),
-            )?,
-            None => (Curve::new(), f64::NAN, f64::NAN),
+        // Each returns its NRMSE and wall time (NaN without a calibrated law).
+        let mut approximate = |with: fn(Law) -> Law, name: String| match cal {
+            Some(m) => advanced(with(m), &name).map(|(_, e, t)| (e, t)),
+            None => Ok((f64::NAN, f64::NAN)),
         };
-        let (_, ke, kt) = match cal {
-            Some(m) => advanced(
-                Law { update_every: UPDATE_EVERY, ..m },
-                &format!("mc_advanced_every{UPDATE_EVERY}"),
-            )?,
-            None => (Curve::new(), f64::NAN, f64::NAN),
-        };
+        let (te, tt) = approximate(
+            |m| Law { geometry_tolerance: GEOMETRY_TOLERANCE, ..m },
+            format!("mc_advanced_tol{GEOMETRY_TOLERANCE:e}"),
+        )?;
+        let (ke, kt) = approximate(
+            |m| Law { update_every: UPDATE_EVERY, ..m },
+            format!("mc_advanced_every{UPDATE_EVERY}"),
+        )?;
         let ordered = ae < se && se < he;
         targets.push(Target {
             name: format!("nu = {nu}: NRMSE advanced MC < standard MC < Hertz"),
