@@ -266,7 +266,8 @@ public:
                 "geometryTolerance", &geometry_tolerance_, "a finite number >= 0 (a fraction of the particle radius)");
         if (table.find("updateEvery") == table.end())
             table["updateEvery"] =
-                new StrictSetting<int, parse_step_count>("updateEvery", &update_every_, "a whole number of steps >= 1");
+                new StrictSetting<int, parse_step_count>("updateEvery", &update_every_,
+                                                        "a whole number of steps from 1 to 1000000000");
     }
 
     void postSettings(IContactHistorySetup *, ContactModelBase *) {

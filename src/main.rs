@@ -41,7 +41,7 @@ enum Command {
         /// Multi-contact update interval in steps: recompute the radius changes every K steps and
         /// at neighbour-list builds, keep them in between (default: the deck's `updateEvery`, else
         /// 1 = every step, exact; an approximation that trades accuracy for speed, see docs/dem.md)
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=mcdem::deck::MAX_UPDATE_EVERY))]
         mc_update_every: Option<u64>,
     },
     /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path

@@ -112,13 +112,19 @@ fn update_every_is_checked_and_belongs_to_mc_advanced() {
     };
     let (ok, out) = run_deck(&mc("updateEvery 10"), &[]);
     assert!(ok && out.contains("multi-contact update every 10 steps"), "{out}");
-    for bad in ["0", "2.5", "-3", "often"] {
+    for bad in ["0", "2.5", "-3", "often", "1000000001"] {
         let (ok, out) = run_deck(&mc(&format!("updateEvery {bad}")), &[]);
-        assert!(
-            !ok && out.contains(&format!("updateEvery must be a whole number of steps >= 1, got '{bad}'")),
-            "{out}"
-        );
+        let named = format!("updateEvery must be a whole number of steps from 1 to 1000000000, got '{bad}'");
+        assert!(!ok && out.contains(&named), "{out}");
     }
+    // Walls share the pair style's pass: a different value is a contradiction, not a setting.
+    let wall = "fix w all wall/gran model mc_advanced tangential history primitive type 1 zplane -0.01 updateEvery 5";
+    let walls = mc("updateEvery 10").replace("run 1\n", &format!("{wall}\nrun 1\n"));
+    let (ok, out) = run_deck(&walls, &[]);
+    assert!(!ok && out.contains("wall/gran updateEvery 5 differs from the pair style's"), "{out}");
+    // The command-line approximations belong to mc_advanced as well.
+    let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--mc-update-every", "5"]);
+    assert!(!ok && out.contains("apply to model mc_advanced only; this pair style is model hertz"), "{out}");
     let text = BASE.replace("tangential history", "tangential history updateEvery 10") + "run 1\n";
     let (ok, out) = run_deck(&text, &[]);
     assert!(!ok && out.contains("updateEvery is a setting of model mc_advanced"), "{out}");

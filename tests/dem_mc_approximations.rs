@@ -111,6 +111,30 @@ fn update_interval_bounds_the_piston_force_error() {
     }
 }
 
+#[test]
+fn a_neighbour_build_always_updates() {
+    if !have_example() {
+        return;
+    }
+    // An interval longer than the run: the only full passes are those a neighbour build forces (a
+    // build renumbers the pairs, so the kept radius changes would land on the wrong pairs).
+    let tmp = tempfile::tempdir().unwrap();
+    let (_, out) = piston_force(tmp.path(), &["--mc-update-every", "1000000000"]);
+    let mut builds_total = 0;
+    for line in out.lines().filter(|l| l.starts_with("Loop time")) {
+        let number_before = |tag: &str| -> u64 {
+            let head = line.split(tag).next().unwrap();
+            head.rsplit([' ', '(']).next().unwrap().parse().unwrap()
+        };
+        let builds = number_before(" neighbour builds");
+        let passes: u64 =
+            line.split("full pass in ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        assert_eq!(passes, builds, "{line}");
+        builds_total += builds;
+    }
+    assert!(builds_total > 0, "no neighbour build in the run: {out}");
+}
+
 /// Standard error of `mcdem run` on a small deck with these options (the run must fail).
 fn run_error(options: &[&str]) -> String {
     let out = Command::cargo_bin("mcdem")

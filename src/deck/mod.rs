@@ -138,11 +138,16 @@ fn geometry_tolerance(x: &str) -> R<f64> {
     }
 }
 
-/// `updateEvery` value: a whole number of steps ≥ 1.
+/// Largest `updateEvery` (both engines; the plugin keeps it in an `int`).
+pub const MAX_UPDATE_EVERY: u64 = 1_000_000_000;
+
+/// `updateEvery` value: a whole number of steps from 1 to [`MAX_UPDATE_EVERY`].
 fn update_every(x: &str) -> R<u64> {
     match x.parse::<u64>() {
-        Ok(k) if k >= 1 => Ok(k),
-        _ => Err(format!("updateEvery must be a whole number of steps >= 1, got '{x}'")),
+        Ok(k) if (1..=MAX_UPDATE_EVERY).contains(&k) => Ok(k),
+        _ => Err(format!(
+            "updateEvery must be a whole number of steps from 1 to {MAX_UPDATE_EVERY}, got '{x}'"
+        )),
     }
 }
 
@@ -194,6 +199,9 @@ struct Deck {
     aves: Vec<Option<AveTime>>,
     progress: bool,
     quiet: bool,
+    /// Multi-contact approximations given on the command line (they override the deck's; 0: none).
+    cli_geometry_tolerance: f64,
+    cli_mc_every: u64,
     summary: RunSummary,
     line_no: usize,
     scratch: Vec<f64>,
@@ -315,6 +323,8 @@ impl Deck {
             aves: Vec::new(),
             progress: opts.progress,
             quiet: opts.quiet,
+            cli_geometry_tolerance: opts.mc_geometry_tolerance,
+            cli_mc_every: opts.mc_every,
             summary: RunSummary::default(),
             line_no: 0,
             scratch: Vec::new(),
@@ -1088,13 +1098,19 @@ impl Deck {
         if k != a.len() {
             return Err(unsupported(&format!("pair_style gran keyword {}", a[k])));
         }
-        // The command-line option, when given, takes precedence over the deck's setting.
-        if let (Some(t), 0.0) = (m.geometry_tolerance, self.world.mc_geometry_tolerance) {
-            self.world.mc_geometry_tolerance = t;
+        // The command-line options, when given, take precedence over the deck's settings; they
+        // approximate the multi-contact pass of mc_advanced and of nothing else.
+        let (cli_tol, cli_every) = (self.cli_geometry_tolerance, self.cli_mc_every);
+        if m.model != "mc_advanced" && (cli_tol > 0.0 || cli_every > 1) {
+            return Err(format!(
+                "--mc-geometry-tolerance and --mc-update-every apply to model mc_advanced only; this pair style is model {}",
+                m.model
+            ));
         }
-        if let (Some(k), 0) = (m.update_every, self.world.mc_every) {
-            self.world.mc_every = k;
-        }
+        // A pair style defined again starts from the defaults, as in LIGGGHTS.
+        self.world.mc_geometry_tolerance =
+            if cli_tol > 0.0 { cli_tol } else { m.geometry_tolerance.unwrap_or(0.0) };
+        self.world.mc_every = if cli_every > 0 { cli_every } else { m.update_every.unwrap_or(1) };
         self.pair = Some(m);
         Ok(())
     }
@@ -1324,7 +1340,10 @@ impl Deck {
                     geometry_tolerance(x)?;
                 }
                 ("updateEvery", Some(x)) => {
-                    update_every(x)?;
+                    let k = update_every(x)?;
+                    if self.pair.as_ref().is_some_and(|g| g.update_every.unwrap_or(1) != k) {
+                        return Err(format!("wall/gran updateEvery {x} differs from the pair style's"));
+                    }
                 }
                 _ => return Err(unsupported(&format!("wall/gran keyword {}", a[k]))),
             }

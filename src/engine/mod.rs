@@ -959,7 +959,7 @@ impl World {
         {
             return Ok(());
         }
-        self.mc_due = self.step + self.mc_every.max(1);
+        self.mc_due = self.step.saturating_add(self.mc_every.max(1));
         self.mc_builds = self.builds;
         self.mc_updates += 1;
         let n = self.p.len();
