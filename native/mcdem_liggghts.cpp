@@ -325,7 +325,7 @@ public:
         // rows, so a step with a build always updates.
         const bigint now = update->ntimestep;
         if (update_every_ > 1 && last_update_ >= 0 && now > last_update_ && now - last_update_ < update_every_ &&
-            neighbor->lastcall <= last_update_ && neighbor->lastcall < now)
+            neighbor->lastcall <= last_update_)
             return;
         last_update_ = now;
         update_radius_changes();

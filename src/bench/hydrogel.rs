@@ -108,18 +108,6 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
             .collect()
     };
     report.notes.push(format!("hydrogel: {strokes} strokes of {stroke} steps (the example: 4 of 30000)"));
-    let push = |report: &mut Report, engine, model: &str, threads, (secs, rate): (f64, f64)| {
-        report.rows.push(Row {
-            engine,
-            model: model.into(),
-            scene: SCENE.into(),
-            n: 514,
-            threads,
-            particle_steps_per_s: rate,
-            wall_time_s: secs,
-            memory_bytes_per_particle: None,
-        })
-    };
 
     // LIGGGHTS: the stock laws with the Debian `liggghts`, mc_advanced with the plugin executable.
     let plugin = sibling("mcdem-liggghts");
@@ -154,16 +142,8 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                 let mut c = Command::new(exe);
                 c.arg("-in").arg(&deck).args(vars("0")).args(["-log", "none"]);
                 c.args(["-var", "geomtol", &tol.to_string(), "-var", "mcevery", &every.to_string()]);
-                let (t, rate, force) = measure_force(&mut c, &format!("liggghts {model}"))?;
-                let err = force_error(&exact, &force);
-                say(&format!(
-                    "hydrogel, liggghts {model}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"
-                ));
-                push(report, "liggghts", &model, 1, (t, rate));
-                report.errors.insert(
-                    format!("hydrogel liggghts {model}: max piston-force error / range vs exact"),
-                    err,
-                );
+                let run = measure_force(&mut c, &format!("liggghts {model}"))?;
+                approximate_row(report, say, "liggghts", &model, &exact, run);
             }
         }
     }
@@ -191,15 +171,42 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
     }
     for (tol, every, _) in APPROXIMATIONS {
         let model = approximate_model(tol, every);
-        let (t, rate, force) = rust("0", 1, (tol, every), &model)?;
-        let err = force_error(&exact, &force);
-        say(&format!(
-            "hydrogel, rust {model}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"
-        ));
-        push(report, "rust", &model, 1, (t, rate));
-        report.errors.insert(format!("hydrogel rust {model}: max piston-force error / range vs exact"), err);
+        let run = rust("0", 1, (tol, every), &model)?;
+        approximate_row(report, say, "rust", &model, &exact, run);
     }
     Ok(())
+}
+
+/// One row of this scene.
+fn push(report: &mut Report, engine: &'static str, model: &str, threads: usize, (secs, rate): (f64, f64)) {
+    report.rows.push(Row {
+        engine,
+        model: model.into(),
+        scene: SCENE.into(),
+        n: 514,
+        threads,
+        particle_steps_per_s: rate,
+        wall_time_s: secs,
+        memory_bytes_per_particle: None,
+    })
+}
+
+/// An approximate `mc_advanced` row (one thread) with its piston-force error against the same
+/// engine's exact run, `exact`.
+fn approximate_row(
+    report: &mut Report,
+    say: &mut dyn FnMut(&str),
+    engine: &'static str,
+    model: &str,
+    exact: &[f64],
+    (t, rate, force): (f64, f64, Vec<f64>),
+) {
+    let err = force_error(exact, &force);
+    say(&format!(
+        "hydrogel, {engine} {model}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"
+    ));
+    push(report, engine, model, 1, (t, rate));
+    report.errors.insert(format!("hydrogel {engine} {model}: max piston-force error / range vs exact"), err);
 }
 
 #[cfg(test)]

@@ -296,8 +296,6 @@ impl Deck {
         let mut world = World::new();
         world.skin = 0.0;
         world.pair_threads = opts.pair_threads;
-        world.mc_geometry_tolerance = opts.mc_geometry_tolerance;
-        world.mc_every = opts.mc_every;
         // LAMMPS sorts atoms spatially every 1000 steps unless `atom_modify sort` says otherwise.
         world.sort_every = 1000;
         Ok(Deck {
@@ -1815,29 +1813,26 @@ impl Deck {
         self.summary.loop_seconds += secs;
         self.summary.neighbor_builds += self.world.builds - builds0;
         let rate = if secs > 0.0 { nsteps as f64 * np as f64 / secs } else { 0.0 };
-        // With a geometry tolerance: how often a particle's Eq. 2 geometry was recomputed.
-        let geometry = if self.world.mc_geometry_tolerance > 0.0 {
+        // What the multi-contact approximations did: how often a particle's Eq. 2 geometry was
+        // recomputed, and in how many steps the full pass ran.
+        let mut approx = String::new();
+        if self.world.mc_geometry_tolerance > 0.0 {
             let updates = self.world.mc_influence_updates() - updates0;
-            format!(
+            approx += &format!(
                 ", multi-contact geometry tolerance {:e}: recomputed in {:.2} % of particle-steps",
                 self.world.mc_geometry_tolerance,
                 100.0 * updates as f64 / (nsteps as f64 * np as f64).max(1.0)
-            )
-        } else {
-            String::new()
-        };
-        // With an update interval: how many steps ran the full multi-contact pass.
-        let geometry = if self.world.mc_every > 1 {
-            format!(
-                "{geometry}, multi-contact update every {} steps: full pass in {} of {nsteps} steps",
+            );
+        }
+        if self.world.mc_every > 1 {
+            approx += &format!(
+                ", multi-contact update every {} steps: full pass in {} of {nsteps} steps",
                 self.world.mc_every,
                 self.world.mc_updates - passes0
-            )
-        } else {
-            geometry
-        };
+            );
+        }
         self.say(&format!(
-            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} threads, {} neighbour builds{geometry})\n",
+            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} threads, {} neighbour builds{approx})\n",
             rayon::current_num_threads(),
             self.world.builds - builds0
         ));
