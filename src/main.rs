@@ -93,6 +93,10 @@ enum Command {
         /// Run only this scene group (repeatable; default: all)
         #[arg(long = "scene", value_parser = clap::builder::PossibleValuesParser::new(mcdem::bench::SCENES))]
         scenes: Vec<String>,
+        /// Only write the dense packing with 4 K³ spheres as a data file for
+        /// liggghts_inputs/dense_packing.in (prints the time step it was built for), then stop
+        #[arg(long, num_args = 2, value_names = ["K", "FILE"], allow_negative_numbers = true)]
+        write_packing: Option<Vec<String>>,
     },
     /// Fit advanced MC (γ, MPR, and E where ν > 0.3) per Poisson ratio against the nonlocal reference (Fig. 5)
     Calibrate {
@@ -394,7 +398,22 @@ fn uniaxial(
     Ok(())
 }
 
-fn bench(quick: bool, json: Option<PathBuf>, scenes: Vec<String>) -> Result<(), String> {
+fn bench(
+    quick: bool,
+    json: Option<PathBuf>,
+    scenes: Vec<String>,
+    write: Option<Vec<String>>,
+) -> Result<(), String> {
+    if let Some(w) = write {
+        let k: usize =
+            w[0].parse().ok().filter(|k| (1..=200).contains(k)).ok_or_else(|| {
+                format!("ERROR: --write-packing K: '{}' is not a cell count in 1..200", w[0])
+            })?;
+        let world = mcdem::bench::packing::scene(k, false)?;
+        mcdem::bench::packing::write_data(&world, std::path::Path::new(&w[1]))?;
+        println!("{} spheres written to {}; run it with -var dt {:?}", world.p.len(), w[1], world.dt);
+        return Ok(());
+    }
     let report = mcdem::bench::run(mcdem::bench::Options { quick, scenes }, &mut |l| eprintln!("{l}"))?;
     print!("{}", mcdem::bench::table(&report));
     if let Some(p) = json {
@@ -416,7 +435,7 @@ fn main() -> ExitCode {
             rayon::scope(|_| run(deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every))
         }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
-        Command::Bench { quick, json, scenes } => bench(quick, json, scenes),
+        Command::Bench { quick, json, scenes, write_packing } => bench(quick, json, scenes, write_packing),
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
         Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, solid_volume, out } => {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)

@@ -63,4 +63,46 @@ fn quick_bench_writes_rows_and_ratios() {
             assert!(ratios.contains_key("hertz: rust 1 thread / liggghts"));
         }
     }
+    // The packing deck: both engines on the same data file, both core counts, with their ratios.
+    if std::process::Command::new("liggghts").arg("-h").output().is_ok() {
+        for engine in ["liggghts", "rust"] {
+            assert!(has(engine, "hertz", "packing_deck_phi0.8_N2048"), "packing deck {engine}");
+        }
+        for name in ["rust 1 thread / liggghts 1 rank", "rust 2 threads / liggghts 1 rank"] {
+            let key = format!("hertz packing deck N=19652: {name}");
+            assert!(ratios[&key].as_f64().is_some_and(|r| r.is_finite() && r > 0.0), "{key}");
+        }
+    }
+}
+
+/// `--write-packing K FILE` writes the deck's data file (4 K³ spheres, read back by `mcdem run` in
+/// tests/dem_liggghts.rs) and names a bad K.
+#[test]
+fn write_packing_writes_a_data_file_and_refuses_a_bad_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("p.data");
+    let out = Command::cargo_bin("mcdem")
+        .unwrap()
+        .args(["bench", "--write-packing", "2"])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&data).unwrap();
+    assert!(text.contains("32 atoms") && text.contains("\nVelocities\n"), "{text}");
+    assert_eq!(
+        text.lines().filter(|l| l.split_whitespace().count() == 7).count(),
+        64,
+        "32 atoms + 32 velocities"
+    );
+    for bad in ["0", "two", "-3"] {
+        let out = Command::cargo_bin("mcdem")
+            .unwrap()
+            .args(["bench", "--write-packing", bad])
+            .arg(&data)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("--write-packing K"), "{bad}: {err}");
+    }
 }

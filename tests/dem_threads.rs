@@ -1,5 +1,6 @@
-//! The Rust DEM on two threads gives the serial result bit for bit: pair forces are evaluated
-//! independently and summed in pair order, and the multi-contact kernel runs per particle on
+//! The Rust DEM on two threads gives the serial result bit for bit: pair forces are summed in
+//! pair order (by blocks that own their particles and defer the rest, or from every pair's kept
+//! result), and the multi-contact kernel runs per particle on
 //! disjoint ranges (kept influence matrices included), whatever the thread count. That is what
 //! lets the engine switch threads on and off by timing alone.
 
@@ -52,6 +53,34 @@ fn two_threads_give_the_serial_result_bit_for_bit() {
         let parallel = piston_force(tmp.path(), law, geomtol, PairThreads::Parallel);
         assert!(serial.len() > 1000, "law {law}: piston output too short");
         assert!(serial == parallel, "law {law}, geomtol {geomtol}: two threads changed the piston force");
+    }
+}
+
+/// Both threaded pair passes give the serial state bit for bit, and each runs where it should: a
+/// large packing (19 652 spheres: few pair ends shared between the two blocks) takes the blocks
+/// that own their particles, a small one (2 048) keeps every pair's result. Positions, velocities,
+/// angular velocities and the recorded pair forces after ten steps, Hertz and advanced MC.
+#[test]
+fn both_threaded_pair_passes_give_the_serial_state() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    for (k, advanced, owned) in [(17, false, true), (17, true, true), (8, false, false)] {
+        let run = |threads: PairThreads| {
+            let mut w = mcdem::bench::packing::scene(k, advanced).unwrap();
+            w.pair_threads = threads;
+            pool.install(|| {
+                w.setup().unwrap();
+                for _ in 0..10 {
+                    w.step().unwrap();
+                }
+            });
+            let state = (w.p.x.clone(), w.p.v.clone(), w.p.omega.clone(), w.stress_parts());
+            (state, w.threaded_passes())
+        };
+        let ((serial, none), (parallel, passes)) = (run(PairThreads::Serial), run(PairThreads::Parallel));
+        assert_eq!(none, (0, 0));
+        let expected = if owned { (10, 0) } else { (0, 10) };
+        assert_eq!(passes, expected, "k {k}, advanced {advanced}: (owned-block, kept) passes");
+        assert!(serial == parallel, "k {k}, advanced {advanced}: two threads changed the state");
     }
 }
 

@@ -18,7 +18,7 @@ const LAWS: [(&str, &str); 3] = [("1", "hertz"), ("2", "standard_mc"), ("0", "mc
 
 /// Seconds, steps and atoms summed over the "Loop time of T on P procs for N steps with A atoms"
 /// lines of a LIGGGHTS or mcdem log.
-fn loop_time(text: &str) -> Option<(f64, f64, usize)> {
+pub(super) fn loop_time(text: &str) -> Option<(f64, f64, usize)> {
     let (mut t, mut steps, mut atoms) = (0.0, 0.0, 0);
     for l in text.lines().filter(|l| l.starts_with("Loop time of")) {
         let w: Vec<&str> = l.split_whitespace().collect();
@@ -29,12 +29,12 @@ fn loop_time(text: &str) -> Option<(f64, f64, usize)> {
     (steps > 0.0).then_some((t, steps, atoms))
 }
 
-fn sibling(name: &str) -> Option<PathBuf> {
+pub(super) fn sibling(name: &str) -> Option<PathBuf> {
     let p = std::env::current_exe().ok()?.with_file_name(name);
     p.exists().then_some(p)
 }
 
-fn on_path(name: &str) -> bool {
+pub(super) fn on_path(name: &str) -> bool {
     Command::new(name).arg("-h").output().is_ok()
 }
 

@@ -4,7 +4,9 @@
 //!
 //! Rows: the 514-particle hydrogel deck with LIGGGHTS (stock `hertz`, stock `surface multicontact`,
 //! the `mc_advanced` plugin) and the Rust DEM (same three laws, 1 and 2 threads); a dense periodic
-//! packing (φ = 0.8) at growing N for the Rust DEM; the contact-set kernel at 2, 6 and 12 contacts.
+//! packing (φ = 0.8) at growing N for the Rust DEM, in process (with its memory) and as a deck run by
+//! both engines (LIGGGHTS on 1 and 2 MPI ranks, the Rust DEM on 1 and 2 threads); the contact-set
+//! kernel at 2, 6 and 12 contacts.
 
 mod hydrogel;
 mod kernel;
@@ -129,6 +131,27 @@ fn ratios(r: &mut Report) {
         if first.n != last.n {
             let name = format!("packing hertz 1 thread: cost per particle-step N={} / N={}", last.n, first.n);
             out.insert(name, first.particle_steps_per_s / last.particle_steps_per_s);
+        }
+    }
+    // The packing deck, same data file in both engines: Rust against LIGGGHTS per N, on one core
+    // each and with both cores (Rust threads, LIGGGHTS MPI ranks).
+    let deck: Vec<usize> = {
+        let mut n: Vec<usize> =
+            r.rows.iter().filter(|x| x.scene.starts_with(packing::DECK_SCENE)).map(|x| x.n).collect();
+        n.dedup();
+        n
+    };
+    for n in deck {
+        let scene = format!("{}_N{n}", packing::DECK_SCENE);
+        let row = |e: &str, t: usize| find(r, e, "hertz", &scene, t);
+        for (name, a, b) in [
+            ("rust 1 thread / liggghts 1 rank", row("rust", 1), row("liggghts", 1)),
+            ("rust 2 threads / liggghts 1 rank", row("rust", 2), row("liggghts", 1)),
+            ("rust 2 threads / liggghts 2 ranks", row("rust", 2), row("liggghts", 2)),
+        ] {
+            if let Some(v) = cost(a, b) {
+                out.insert(format!("hertz packing deck N={n}: {name}"), v);
+            }
         }
     }
     r.ratios = out;

@@ -4,8 +4,12 @@
 //! N shows whether neighbour search and memory layout scale; resident memory per particle is read
 //! from /proc while the scene is alive.
 
+use std::fmt::Write as _;
+use std::path::Path;
+use std::process::Command;
 use std::time::Instant;
 
+use super::hydrogel::{loop_time, on_path, sibling};
 use super::{Options, Report, Row};
 use crate::engine::{Closure, Domain, World};
 use crate::physics::ghods2022::MprTest;
@@ -15,7 +19,7 @@ use crate::physics::{Material, Vec3};
 pub const SCENE: &str = "packing_phi0.8";
 
 /// Lattice cells per side for the sizes measured (4 k³ particles).
-fn cells(quick: bool) -> &'static [usize] {
+pub fn cells(quick: bool) -> &'static [usize] {
     if quick {
         &[8, 17]
     } else {
@@ -81,10 +85,153 @@ pub fn scene(k: usize, advanced: bool) -> Result<World, String> {
     Ok(w)
 }
 
+/// Writes `w` as a LIGGGHTS data file (`atom_style sphere`: `id type diameter density x y z`, then
+/// `Velocities`), the input of `liggghts_inputs/dense_packing.in`. Numbers are written in their
+/// shortest exact form, so both engines start from bit-identical positions and velocities.
+pub fn write_data(w: &World, path: &Path) -> Result<(), String> {
+    let d = w.domain.ok_or("write_data: the scene has no box")?;
+    let p = &w.p;
+    let mut s = String::with_capacity(160 * p.len());
+    let _ = writeln!(s, "dense periodic packing, solid fraction 0.8 (mcdem bench)\n");
+    let _ = writeln!(s, "{} atoms\n{} atom types\n", p.len(), w.ntypes.max(1));
+    for (a, name) in ["x", "y", "z"].iter().enumerate() {
+        let _ = writeln!(s, "{:?} {:?} {name}lo {name}hi", d.lo[a], d.hi[a]);
+    }
+    s.push_str("\nAtoms\n\n");
+    for i in 0..p.len() {
+        let (x, r) = (p.x[i], p.radius[i]);
+        let _ = writeln!(
+            s,
+            "{} {} {:?} {:?} {:?} {:?} {:?}",
+            p.id[i],
+            p.typ[i] + 1,
+            2.0 * r,
+            p.density[i],
+            x.x,
+            x.y,
+            x.z
+        );
+    }
+    s.push_str("\nVelocities\n\n");
+    for i in 0..p.len() {
+        let (v, o) = (p.v[i], p.omega[i]);
+        let _ = writeln!(s, "{} {:?} {:?} {:?} {:?} {:?} {:?}", p.id[i], v.x, v.y, v.z, o.x, o.y, o.z);
+    }
+    std::fs::write(path, s).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// Steps measured for a packing of `n` particles: at least ~4e6 particle-steps per row (the
+/// small packing's steps are short: timing noise).
+fn steps_for(quick: bool, n: usize) -> usize {
+    if quick {
+        40
+    } else {
+        (4_000_000 / n).max(200)
+    }
+}
+
+/// The packing as a deck (`liggghts_inputs/dense_packing.in`, Hertz): the same data file run by
+/// LIGGGHTS on one and two MPI ranks and by the Rust DEM on one and two threads, each a child
+/// process timed by its own "Loop time" line. This is where the two engines' Hertz rates compare
+/// at growing N; the in-process rows above measure the Rust DEM alone (and its memory).
+fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
+    let decks = Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs");
+    let exe = if on_path("liggghts") { Some("liggghts".into()) } else { sibling("mcdem-liggghts") };
+    let Some(liggghts) = exe else {
+        report.notes.push("packing deck rows skipped: neither liggghts nor mcdem-liggghts found".into());
+        return Ok(());
+    };
+    let mpi = Command::new("mpirun").arg("--version").output().is_ok_and(|o| o.status.success());
+    let me = std::env::current_exe().map_err(|e| e.to_string())?;
+    let work = std::env::temp_dir().join(format!("mcdem-bench-packing-{}", std::process::id()));
+    std::fs::create_dir_all(&work).map_err(|e| e.to_string())?;
+    let result = (|| -> Result<(), String> {
+        for &k in cells(opts.quick) {
+            let w = scene(k, false)?;
+            let n = w.p.len();
+            let data = work.join(format!("packing_{n}.data"));
+            write_data(&w, &data)?;
+            // Longer than the in-process rows: these include the engine's thread probe (the
+            // first 100 steps), which must not decide the row.
+            let steps = if opts.quick { 40 } else { (20_000_000 / n).max(1000) };
+            let vars = [
+                ("data", data.display().to_string()),
+                ("dt", format!("{:?}", w.dt)),
+                ("steps", steps.to_string()),
+                ("every", steps.to_string()),
+                ("dir", decks.display().to_string()),
+            ];
+            let deck_args = |c: &mut Command| {
+                c.arg("-in").arg(decks.join("dense_packing.in"));
+                for (k, v) in &vars {
+                    c.args(["-var", k, v]);
+                }
+                c.args(["-log", "none"]).current_dir(&work);
+            };
+            let mut runs: Vec<(&'static str, usize, Command)> = Vec::new();
+            let mut c = Command::new(&liggghts);
+            deck_args(&mut c);
+            runs.push(("liggghts", 1, c));
+            if mpi {
+                let mut c = Command::new("mpirun");
+                c.args(["--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np", "2"]);
+                c.env("OMPI_MCA_mpi_yield_when_idle", "1").arg(&liggghts);
+                deck_args(&mut c);
+                runs.push(("liggghts", 2, c));
+            }
+            for threads in [1usize, 2] {
+                let mut c = Command::new(&me);
+                c.arg("run").arg(decks.join("dense_packing.in"));
+                for (k, v) in &vars {
+                    c.args(["-var", k, v]);
+                }
+                c.args(["-log", "none", "--no-progress"]).current_dir(&work);
+                c.env("RAYON_NUM_THREADS", threads.to_string());
+                runs.push(("rust", threads, c));
+            }
+            for (engine, threads, mut c) in runs {
+                let what = format!("packing deck N = {n}, {engine} hertz, {threads} core(s)");
+                let out = c.output().map_err(|e| format!("{what}: cannot start: {e}"))?;
+                let text = String::from_utf8_lossy(&out.stdout);
+                if !out.status.success() {
+                    let tail: Vec<&str> = text.lines().rev().take(5).collect();
+                    return Err(format!("{what} failed: {}", tail.join(" | ")));
+                }
+                let (secs, st, atoms) =
+                    loop_time(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
+                let rate = st * atoms as f64 / secs;
+                say(&format!("{what}: {rate:.3e} particle-steps/s"));
+                report.rows.push(Row {
+                    engine,
+                    model: "hertz".into(),
+                    scene: format!("{DECK_SCENE}_N{n}"),
+                    n,
+                    threads,
+                    particle_steps_per_s: rate,
+                    wall_time_s: secs,
+                    memory_bytes_per_particle: None,
+                });
+            }
+        }
+        Ok(())
+    })();
+    let _ = std::fs::remove_dir_all(&work);
+    result?;
+    report.notes.push(format!(
+        "packing deck: liggghts_inputs/dense_packing.in (hertz), {} steps, one process per row; threads = MPI ranks for liggghts{}",
+        if opts.quick { "40" } else { "max(1000, 2e7/N)" },
+        if mpi { "" } else { " (mpirun not found: 1 rank only)" }
+    ));
+    Ok(())
+}
+
+/// Scene name of the deck rows.
+pub const DECK_SCENE: &str = "packing_deck_phi0.8";
+
 pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
     // At least ~4e6 particle-steps per row (the small packing's steps are short: timing noise),
     // after a warm-up that covers the engine's first serial-vs-threads probe.
-    let steps_for = |n: usize| if opts.quick { 40 } else { (4_000_000 / n).max(200) };
+    let steps_for = |n: usize| steps_for(opts.quick, n);
     let warmup = 5 + crate::engine::THREAD_PROBE_STEPS;
     let base = rss_bytes();
     for &k in cells(opts.quick) {
@@ -134,5 +281,5 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
         "packing: {} after {warmup} warm-up steps (the engine's first thread probe included); memory = resident-set growth over the start of the bench while the scene is alive",
         if opts.quick { "40 steps" } else { "max(200, 4e6/N) steps" }
     ));
-    Ok(())
+    deck_rows(opts, report, say)
 }

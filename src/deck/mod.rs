@@ -235,25 +235,29 @@ fn int(s: &str) -> R<i64> {
 
 /// Splits a command line into words; a double-quoted string is one word (quotes removed).
 fn words(line: &str) -> R<Vec<String>> {
+    // LAMMPS quoting: "…" or '…' make one word; inside one kind, the other is a plain character.
     let mut out = Vec::new();
     let mut cur = String::new();
-    let mut inq = false;
+    let mut quote: Option<char> = None;
     let mut had = false;
     for c in line.chars() {
-        if c == '"' {
-            inq = !inq;
-            had = true;
-        } else if c.is_whitespace() && !inq {
-            if had || !cur.is_empty() {
-                out.push(std::mem::take(&mut cur));
-                had = false;
+        match quote {
+            Some(q) if c == q => quote = None,
+            None if c == '"' || c == '\'' => {
+                quote = Some(c);
+                had = true;
             }
-        } else {
-            cur.push(c);
+            None if c.is_whitespace() => {
+                if had || !cur.is_empty() {
+                    out.push(std::mem::take(&mut cur));
+                    had = false;
+                }
+            }
+            _ => cur.push(c),
         }
     }
-    if inq {
-        return Err("unterminated quote".into());
+    if let Some(q) = quote {
+        return Err(format!("unterminated quote {q}"));
     }
     if had || !cur.is_empty() {
         out.push(cur);
@@ -263,12 +267,13 @@ fn words(line: &str) -> R<Vec<String>> {
 
 /// Strips a `#` comment that is not inside quotes.
 fn strip_comment(line: &str) -> &str {
-    let mut inq = false;
+    let mut quote: Option<char> = None;
     for (k, c) in line.char_indices() {
-        if c == '"' {
-            inq = !inq;
-        } else if c == '#' && !inq {
-            return &line[..k];
+        match quote {
+            Some(q) if c == q => quote = None,
+            None if c == '"' || c == '\'' => quote = Some(c),
+            None if c == '#' => return &line[..k],
+            _ => {}
         }
     }
     line
@@ -857,6 +862,8 @@ impl Deck {
         let lines = text.lines().skip(1);
         let mut section = "";
         let mut vel_seen = false;
+        // Velocities name atoms by id: one map for the section (a search per line is quadratic).
+        let mut by_id = std::collections::HashMap::new();
         for l in lines {
             let l = strip_comment(l).trim();
             if l.is_empty() {
@@ -876,6 +883,7 @@ impl Deck {
                 ["Velocities"] => {
                     section = "Velocities";
                     vel_seen = true;
+                    by_id = self.world.p.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
                 }
                 [word, ..] if word.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) => {
                     return Err(unsupported(&format!(
@@ -915,7 +923,7 @@ impl Deck {
                             ));
                         }
                         let id = int(t[0])?;
-                        let i = self.index_of(id)?;
+                        let i = *by_id.get(&id).ok_or_else(|| format!("no atom with id {id}"))?;
                         self.world.p.v[i] = Vec3::new(num(t[1])?, num(t[2])?, num(t[3])?);
                         self.world.p.omega[i] = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
                     }
@@ -1856,4 +1864,21 @@ fn split_index(s: &str) -> R<(&str, Option<usize>)> {
 
 mod mesh {
     pub use crate::engine::mesh::read_stl as read;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{strip_comment, words};
+
+    /// LAMMPS quoting: double or single quotes make one word, the other kind is plain inside,
+    /// and `#` inside quotes is not a comment.
+    #[test]
+    fn quotes_of_either_kind_make_one_word() {
+        let w = words(r#"if "${a} > 0" then "dump_modify d format '%d %g'" 'x "y"'"#).unwrap();
+        assert_eq!(w, ["if", "${a} > 0", "then", "dump_modify d format '%d %g'", "x \"y\""]);
+        assert_eq!(words("print ''").unwrap(), ["print", ""]);
+        assert!(words("print 'open").unwrap_err().contains("unterminated quote '"));
+        assert_eq!(strip_comment("print '# not a comment' # a comment"), "print '# not a comment' ");
+        assert_eq!(strip_comment(r#"print "it's" # c"#), r#"print "it's" "#);
+    }
 }
