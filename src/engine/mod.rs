@@ -463,7 +463,8 @@ pub struct World {
 /// pair forces are summed in pair order), so this only decides speed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum PairThreads {
-    /// Every `TUNE_PERIOD` steps, time a window with and without threads and keep the faster.
+    /// Every `TUNE_PERIOD` steps, time windows with and without threads (alternating in slices)
+    /// and keep the faster.
     #[default]
     Auto,
     Serial,
@@ -572,7 +573,9 @@ impl World {
         }
         self.neighbor_check()?;
         // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window with
-        // and without them and keep the faster (results are bit-identical either way).
+        // and without them and keep the faster (results are bit-identical either way). The two
+        // alternate in slices, so that a passing disturbance (another process, the pool's first
+        // wake-up, buffers allocated at their first use) is shared rather than blamed on one.
         let phase = self.step % TUNE_PERIOD;
         let probe = match self.pair_threads {
             PairThreads::Auto => phase < 2 * TUNE_WINDOW,
@@ -582,7 +585,7 @@ impl World {
             }
         };
         if probe {
-            self.parallel = phase >= TUNE_WINDOW;
+            self.parallel = (phase / TUNE_SLICE) % 2 == 1;
         }
         let t0 = probe.then(std::time::Instant::now);
         self.compute_forces(true)?;
@@ -1518,9 +1521,11 @@ impl World {
 /// model's range (Eq. 3 caps each neighbour term at MPR r, about 0.1 r).
 const RECEIVER_GAP: f64 = 0.1;
 
-/// Steps between two serial-vs-threads timing probes, and the length of each probe window.
+/// Steps between two serial-vs-threads timing probes, the steps each probe times in each mode,
+/// and the slices in which the modes alternate.
 const TUNE_PERIOD: u64 = 5000;
 const TUNE_WINDOW: u64 = 50;
+const TUNE_SLICE: u64 = 10;
 
 /// Steps after which the first serial-vs-threads probe has decided (benchmarks warm up this long).
 pub const THREAD_PROBE_STEPS: u64 = 2 * TUNE_WINDOW;
