@@ -2,18 +2,21 @@
 //! the ratios the issue asks for are present. (No speed threshold: rates on a shared machine are
 //! reported, never asserted.)
 
+use std::path::Path;
+use std::process::Output;
+
 use assert_cmd::Command;
+
+/// `mcdem bench ARGS… FILE`.
+fn bench(args: &[&str], file: &Path) -> Output {
+    Command::cargo_bin("mcdem").unwrap().arg("bench").args(args).arg(file).output().unwrap()
+}
 
 #[test]
 fn quick_bench_writes_rows_and_ratios() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("bench.json");
-    let out = Command::cargo_bin("mcdem")
-        .unwrap()
-        .args(["bench", "--quick", "--json"])
-        .arg(&json)
-        .output()
-        .unwrap();
+    let out = bench(&["--quick", "--json"], &json);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = v["rows"].as_array().unwrap();
@@ -81,12 +84,7 @@ fn quick_bench_writes_rows_and_ratios() {
 fn write_packing_writes_a_data_file_and_refuses_a_bad_size() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("p.data");
-    let out = Command::cargo_bin("mcdem")
-        .unwrap()
-        .args(["bench", "--write-packing", "2"])
-        .arg(&data)
-        .output()
-        .unwrap();
+    let out = bench(&["--write-packing", "2"], &data);
     assert!(out.status.success());
     let text = std::fs::read_to_string(&data).unwrap();
     assert!(text.contains("32 atoms") && text.contains("\nVelocities\n"), "{text}");
@@ -96,12 +94,7 @@ fn write_packing_writes_a_data_file_and_refuses_a_bad_size() {
         "32 atoms + 32 velocities"
     );
     for bad in ["0", "two", "-3"] {
-        let out = Command::cargo_bin("mcdem")
-            .unwrap()
-            .args(["bench", "--write-packing", bad])
-            .arg(&data)
-            .output()
-            .unwrap();
+        let out = bench(&["--write-packing", bad], &data);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && err.contains("--write-packing K"), "{bad}: {err}");
     }
