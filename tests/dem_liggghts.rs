@@ -155,7 +155,7 @@ fn die_decks_hertz_match_liggghts_step_by_step() {
 }
 
 /// The bench's dense packing as a deck (`dense_packing.in`): 256 polydisperse spheres (d = 1 mm
-/// ± 5 %, ν = 0.4, μ = 0.5) squeezed to φ = 0.8, triply periodic, every sphere with about seven
+/// ± 5 %, ν = 0.4, μ = 0.5) squeezed to φ = 0.8, triply periodic, every sphere with about twelve
 /// overlapping neighbours, many across the boundaries, released with random velocities. The data
 /// file comes from `mcdem bench --write-packing`, so both engines start from the same bits.
 /// Thirty steps: the packing spins up fast (ω to ~50 rad/s), and over longer runs the two
