@@ -161,11 +161,9 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
                 ("every", steps.to_string()),
                 ("dir", decks.display().to_string()),
             ];
+            let var_args: Vec<&str> = vars.iter().flat_map(|(k, v)| ["-var", k, v.as_str()]).collect();
             let deck_args = |c: &mut Command| {
-                c.arg("-in").arg(decks.join("dense_packing.in"));
-                for (k, v) in &vars {
-                    c.args(["-var", k, v]);
-                }
+                c.arg("-in").arg(decks.join("dense_packing.in")).args(&var_args);
                 c.args(["-log", "none"]).current_dir(&work);
             };
             let mut runs: Vec<(&'static str, usize, Command)> = Vec::new();
@@ -181,10 +179,7 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
             }
             for threads in [1usize, 2] {
                 let mut c = Command::new(&me);
-                c.arg("run").arg(decks.join("dense_packing.in"));
-                for (k, v) in &vars {
-                    c.args(["-var", k, v]);
-                }
+                c.arg("run").arg(decks.join("dense_packing.in")).args(&var_args);
                 c.args(["-log", "none", "--no-progress"]).current_dir(&work);
                 c.env("RAYON_NUM_THREADS", threads.to_string());
                 runs.push(("rust", threads, c));

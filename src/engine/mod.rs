@@ -773,8 +773,8 @@ impl World {
         self.threaded_passes
     }
 
-    /// Splits the pairs into `blocks` equal ranges and gives each particle to the first block (in
-    /// pair order) with a pair on it; particles on no pair get `u16::MAX` (nobody writes them).
+    /// Splits the pairs into `blocks` runs of [`block_len`] pairs and gives each particle to the
+    /// first block (in pair order) with a pair on it; particles on no pair get `u16::MAX` (nobody writes them).
     /// Every contribution a particle receives from its owner comes before any from later blocks,
     /// so the owner may add straight into the sums while later blocks defer theirs: the threaded
     /// pass then adds in exactly the serial order. With the particles sorted in space, only a
@@ -784,8 +784,8 @@ impl World {
         self.owner.clear();
         self.owner.resize(n, u16::MAX);
         let mut shared = 0;
-        for b in 0..blocks {
-            for pr in &self.pairs[block_range(np, blocks, b)] {
+        for (b, block) in self.pairs.chunks(block_len(np, blocks)).enumerate() {
+            for pr in block {
                 for a in [pr.i as usize, pr.j as usize] {
                     if self.owner[a] == u16::MAX {
                         self.owner[a] = b as u16;
@@ -1131,11 +1131,10 @@ impl World {
         }
         let dt = if update { self.dt } else { 0.0 };
         let nt = self.ntypes;
-        // Threads, when the timing probe says they pay: a few blocks of pairs per thread, so that
-        // a thread that starts late (waking up) or runs slow leaves its share to the others.
+        // Threads, when the timing probe says they pay: one block of pairs each (more blocks
+        // share more particles, whose sums are deferred), none below two blocks' worth of pairs.
         let threads = rayon::current_num_threads();
-        let blocks =
-            (BLOCKS_PER_THREAD * threads).min(self.pairs.len() / MIN_BLOCK_PAIRS).min(MAX_PAIR_BLOCKS);
+        let blocks = threads.min(self.pairs.len() / MIN_BLOCK_PAIRS).min(MAX_PAIR_BLOCKS);
         let threaded = self.parallel && threads > 1 && blocks > 1;
         if threaded && self.owner_key != Some((self.pairs.len(), blocks, n)) {
             self.assign_owners(blocks);
@@ -1176,24 +1175,18 @@ impl World {
             torque.clear();
             torque.resize(n, Vec3::zeros());
             let sums = SharedSums { f: f.as_mut_ptr(), torque: torque.as_mut_ptr(), n };
+            // Every list emptied first: a block without pairs (fewer runs than blocks) adds none.
+            self.deferred.iter_mut().for_each(Vec::clear);
             // One work item per block: its pairs, radius changes, recorded forces and deferrals.
-            let mut items = Vec::with_capacity(blocks);
-            let (mut prs, mut drs, mut forces) =
-                (&mut self.pairs[..], &self.pair_dr[..], &mut self.pair_force[..]);
-            for (b, deferred) in self.deferred.iter_mut().enumerate() {
-                let len = block_range(np, blocks, b).len();
-                let (p0, p1) = std::mem::take(&mut prs).split_at_mut(len);
-                let (d0, d1) = drs.split_at(len);
-                let (f0, f1) = std::mem::take(&mut forces).split_at_mut(len);
-                (prs, drs, forces) = (p1, d1, f1);
-                deferred.clear();
-                items.push((b as u16, p0, d0, f0, deferred));
-            }
-            let owner = &self.owner;
-            items
-                .into_par_iter()
-                .try_for_each(|(block, prs, drs, force, deferred)| {
-                    let mut sink = OwnedSums { sums, owner, block, deferred, force };
+            let (size, owner) = (block_len(np, blocks), &self.owner);
+            self.pairs
+                .par_chunks_mut(size)
+                .zip(self.pair_dr.par_chunks(size))
+                .zip(self.pair_force.par_chunks_mut(size))
+                .zip(self.deferred.par_iter_mut())
+                .enumerate()
+                .try_for_each(|(b, (((prs, drs), force), deferred))| {
+                    let mut sink = OwnedSums { sums, owner, block: b as u16, deferred, force };
                     if batched {
                         ctx.eval_batched(prs, drs, &mut sink)
                     } else {
@@ -1533,15 +1526,14 @@ pub const THREAD_PROBE_STEPS: u64 = 2 * TUNE_WINDOW;
 /// Pairs per parallel work item of the threaded pass that keeps every pair's result.
 const PARALLEL_CHUNK: usize = 256;
 
-/// Blocks of pairs per thread in the threaded pair pass, fewest pairs in a block, and most
-/// blocks (each block boundary shares a thin layer of particles, whose sums are deferred).
-const BLOCKS_PER_THREAD: usize = 1;
+/// Fewest pairs in a block of the threaded pair pass, and most blocks (block indices are kept
+/// in a `u16` per particle).
 const MIN_BLOCK_PAIRS: usize = 512;
 const MAX_PAIR_BLOCKS: usize = 64;
 
-/// Pair indices of block `b` of `blocks` equal ranges over `np` pairs.
-fn block_range(np: usize, blocks: usize, b: usize) -> std::ops::Range<usize> {
-    b * np / blocks..(b + 1) * np / blocks
+/// Pairs per block when `np` pairs are split into `blocks` runs (the last may be shorter).
+fn block_len(np: usize, blocks: usize) -> usize {
+    np.div_ceil(blocks).max(1)
 }
 
 /// Read-only view of the state that one pair evaluation needs (shared between threads).
