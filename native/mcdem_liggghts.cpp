@@ -105,17 +105,14 @@ template struct PrivateAccess<RowsTag, &FixContactHistory::contacthistory_>;
 // A keyword with two named options (`mprTest abs|signed`, `pairRadii modified|stock`).
 class ChoiceSetting : public Setting {
 public:
-    ChoiceSetting(const char *name, const char *off, const char *on, bool *target)
-        : Setting(name, 1), off_(off), on_(on), target_(target) {}
+    ChoiceSetting(const char *name, const char *off, const char *on, bool *target, bool *given)
+        : Setting(name, 1), off_(off), on_(on), target_(target), given_(given) {}
     int parseArguments(char **args) {
         if (name != args[0]) return 0;
         const char *v = args[1];
-        if (v && off_ == v) {
-            *target_ = false;
-            return 2;
-        }
-        if (v && on_ == v) {
-            *target_ = true;
+        if (v && (off_ == v || on_ == v)) {
+            *target_ = on_ == v;
+            *given_ = true;
             return 2;
         }
         error_message = "model mc_advanced: " + name + " must be '" + off_ + "' or '" + on_ + "', got '" +
@@ -127,6 +124,7 @@ public:
 private:
     std::string off_, on_;
     bool *target_;
+    bool *given_;
 };
 
 // Numeric model settings parsed strictly: the library's own DoubleSetting reads with atof, which
@@ -154,8 +152,8 @@ void print_setting(FILE *out, int v) { std::fprintf(out, "%d", v); }
 template <typename T, bool (*Parse)(const char *, T *)>
 class StrictSetting : public Setting {
 public:
-    StrictSetting(const char *name, T *target, const char *expected)
-        : Setting(name, 1), target_(target), expected_(expected) {}
+    StrictSetting(const char *name, T *target, bool *given, const char *expected)
+        : Setting(name, 1), target_(target), given_(given), expected_(expected) {}
     int parseArguments(char **args) {
         if (name != args[0]) return 0;
         const char *v = args[1];
@@ -163,12 +161,14 @@ public:
             error_message = "model mc_advanced: " + name + " must be " + expected_ + ", got '" + (v ? v : "") + "'";
             return -1;
         }
+        *given_ = true;
         return 2;
     }
     void print_value(FILE *out) { print_setting(out, *target_); }
 
 private:
     T *target_;
+    bool *given_;
     std::string expected_;
 };
 
@@ -186,6 +186,11 @@ const char *const kRecordName = "mcdem_mc_record";
 // only radius growth creates must be known before it touches. Users can raise it with
 // `neigh_modify contact_distance_factor`.
 const double kContactDistanceFactor = 1.2;
+
+// Model settings that only the pair style's model applies: it computes the radius changes of every
+// contact, walls included. A wall may repeat them but not give other values (they would be ignored).
+// pairRadii concerns pairs only (a wall contact always uses the modified radius): walls may give any.
+enum SharedSetting { kMprTest, kPairRadii, kGeometryTolerance, kUpdateEvery, kSharedSettings };
 
 }  // namespace
 
@@ -235,6 +240,7 @@ public:
           cache_(NULL),
           ntypes_(0),
           sources_ready_(false) {
+        for (int k = 0; k < kSharedSettings; k++) given_[k] = false;
         // Per-contact record read by the next step's radius changes: pairs the two modified radii
         // (see write_pair_record) and |F_n|; walls the contact point relative to the centre and
         // |F_n| (the layout LIGGGHTS's HistoryData expects).
@@ -251,27 +257,33 @@ public:
         c->add_history_offset(kRecordName, record_offset_);
     }
 
-    ~NormalModel() { mcdem_influence_cache_free(cache_); }
+    ~NormalModel() {
+        if (pair_model_ == this) pair_model_ = NULL;
+        mcdem_influence_cache_free(cache_);
+    }
 
     void registerSettings(Settings &settings) {
         settings.registerOnOff("tangential_damping", tangential_damping_, true);
         settings.registerOnOff("limitForce", limit_force_);
         std::map<std::string, Setting *> &table = settings.*private_member(SettingsTableTag());
         if (table.find("mprTest") == table.end())
-            table["mprTest"] = new ChoiceSetting("mprTest", "abs", "signed", &signed_test_);
+            table["mprTest"] = new ChoiceSetting("mprTest", "abs", "signed", &signed_test_, &given_[kMprTest]);
         if (table.find("pairRadii") == table.end())
-            table["pairRadii"] = new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_);
+            table["pairRadii"] =
+                new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_, &given_[kPairRadii]);
         if (table.find("geometryTolerance") == table.end())
             table["geometryTolerance"] = new StrictSetting<double, parse_nonnegative>(
-                "geometryTolerance", &geometry_tolerance_, "a finite number >= 0 (a fraction of the particle radius)");
+                "geometryTolerance", &geometry_tolerance_, &given_[kGeometryTolerance],
+                "a finite number >= 0 (a fraction of the particle radius)");
         if (table.find("updateEvery") == table.end())
             table["updateEvery"] =
-                new StrictSetting<int, parse_step_count>("updateEvery", &update_every_,
+                new StrictSetting<int, parse_step_count>("updateEvery", &update_every_, &given_[kUpdateEvery],
                                                         "a whole number of steps from 1 to 1000000000");
     }
 
     void postSettings(IContactHistorySetup *, ContactModelBase *) {
         if (cmb_->is_wall()) return;
+        pair_model_ = this;
         // Switches on the library's per-contact radius storage, read by the pair and wall loops
         // for detection, overlap and effective radius; it must be set before the pair's init.
         PairGran *pg = dynamic_cast<PairGran *>(force->pair);
@@ -286,6 +298,7 @@ public:
             if (!pg || !pg->contact_match("normal", "mc_advanced"))
                 error->all(FLERR, "fix wall/gran with model mc_advanced needs `pair_style gran model mc_advanced`: "
                                   "the multi-contact radius changes are computed by the pair style");
+            check_wall_settings();
             return;
         }
         if (force->newton_pair)
@@ -429,6 +442,36 @@ public:
     }
 
 private:
+    // Stops a deck whose wall gives a shared setting (see SharedSetting) another value than the
+    // pair style's, instead of ignoring it.
+    void check_wall_settings() const {
+        const NormalModel *p = pair_model_;
+        if (!p) return;
+        char mine[64], theirs[64];
+        const char *name = NULL;
+        if (given_[kMprTest] && signed_test_ != p->signed_test_) {
+            name = "mprTest";
+            std::snprintf(mine, sizeof(mine), "%s", signed_test_ ? "signed" : "abs");
+            std::snprintf(theirs, sizeof(theirs), "%s", p->signed_test_ ? "signed" : "abs");
+        } else if (given_[kGeometryTolerance] && geometry_tolerance_ != p->geometry_tolerance_) {
+            name = "geometryTolerance";
+            std::snprintf(mine, sizeof(mine), "%g", geometry_tolerance_);
+            std::snprintf(theirs, sizeof(theirs), "%g", p->geometry_tolerance_);
+        } else if (given_[kUpdateEvery] && update_every_ != p->update_every_) {
+            name = "updateEvery";
+            std::snprintf(mine, sizeof(mine), "%d", update_every_);
+            std::snprintf(theirs, sizeof(theirs), "%d", p->update_every_);
+        }
+        if (!name) return;
+        char msg[512];
+        std::snprintf(msg, sizeof(msg),
+                      "fix wall/gran with model mc_advanced: %s %s differs from the pair style's %s %s (the pair "
+                      "style computes the radius changes of every contact, walls included: set it there, or "
+                      "repeat its value here)",
+                      name, mine, name, theirs);
+        error->all(FLERR, msg);
+    }
+
     FixPropertyGlobal *find_property(const char *name, const char *kind, int len, const char *usage) {
         Fix *f = modify->find_fix_property(name, "property/global", kind, len, 0, "model mc_advanced", false);
         if (!f) {
@@ -702,7 +745,13 @@ private:
     std::vector<mcdem_contact_load> loads_;
     std::vector<double> delta_;
     std::vector<uint8_t> fallback_;
+    // Which shared settings this model's deck line gave (SharedSetting order).
+    bool given_[kSharedSettings];
+    // The pair style's model (set when its settings are parsed), whose shared settings apply.
+    static NormalModel *pair_model_;
 };
+
+NormalModel<MC_ADVANCED> *NormalModel<MC_ADVANCED>::pair_model_ = NULL;
 
 }  // namespace ContactModels
 }  // namespace LIGGGHTS

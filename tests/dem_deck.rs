@@ -122,6 +122,13 @@ fn update_every_is_checked_and_belongs_to_mc_advanced() {
     let walls = mc("updateEvery 10").replace("run 1\n", &format!("{wall}\nrun 1\n"));
     let (ok, out) = run_deck(&walls, &[]);
     assert!(!ok && out.contains("wall/gran updateEvery 5 differs from the pair style's"), "{out}");
+    let tol = wall.replace("updateEvery 5", "geometryTolerance 1e-3");
+    let (ok, out) = run_deck(&mc("updateEvery 10").replace("run 1\n", &format!("{tol}\nrun 1\n")), &[]);
+    assert!(!ok && out.contains("wall/gran geometryTolerance 1e-3 differs from the pair style's"), "{out}");
+    // Repeating the pair style's values is fine.
+    let same = wall.replace("updateEvery 5", "updateEvery 10 geometryTolerance 0");
+    let (ok, out) = run_deck(&mc("updateEvery 10").replace("run 1\n", &format!("{same}\nrun 1\n")), &[]);
+    assert!(ok, "{out}");
     // The command-line approximations belong to mc_advanced as well.
     let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--mc-update-every", "5"]);
     assert!(!ok && out.contains("apply to model mc_advanced only; this pair style is model hertz"), "{out}");

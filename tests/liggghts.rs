@@ -268,6 +268,25 @@ fn bad_decks_stop_with_one_error_line_naming_the_cause() {
     expect_error((two, vec![("geomtol", "small")]), d, &["geometryTolerance", "small"]);
     let deck = edited_deck(d, |t| t.replace("${mkey3} ${mval3}", "geometryTolerance -1e-3"));
     expect_error((&deck, vec![]), d, &["geometryTolerance", "-1e-3"]);
+    // A wall's multi-contact settings would be ignored (the pair style's pass serves it): another
+    // value than the pair style's stops the deck, the same value is accepted.
+    // (`slot` is the wall line's `${mkeyN} ${mvalN}` pair to replace: the deck gives every setting
+    // once, and the last value given wins.)
+    let wall_setting = |slot: &str, setting: &str| {
+        edited_deck(d, |t| {
+            t.lines()
+                .map(|l| if l.contains("wall/gran") { l.replace(slot, setting) } else { l.into() })
+                .collect::<Vec<_>>()
+                .join("\n")
+        })
+    };
+    let tol = wall_setting("${mkey3} ${mval3}", "geometryTolerance 1e-3");
+    expect_error((&tol, vec![]), d, &["geometryTolerance 0.001", "pair style's geometryTolerance 0"]);
+    run_ok(d, &tol, &[("geomtol", "1e-3"), ("steps", "10")]);
+    let every = wall_setting("${mkey4} ${mval4}", "updateEvery 4");
+    expect_error((&every, vec![]), d, &["updateEvery 4", "pair style's updateEvery 1"]);
+    let signed = wall_setting("${mkey} ${mval}", "mprTest signed");
+    expect_error((&signed, vec![]), d, &["mprTest signed", "pair style's mprTest abs"]);
     expect_error((two, vec![("mcevery", "0")]), d, &["updateEvery", "'0'"]);
     expect_error((two, vec![("mcevery", "2.5")]), d, &["updateEvery", "2.5"]);
 

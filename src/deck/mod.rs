@@ -1341,9 +1341,13 @@ impl Deck {
                 }
                 // Pairs only: a wall contact always uses the particle's modified radius.
                 ("pairRadii", Some("modified" | "stock")) => {}
-                // The pair style's multi-contact pass serves the walls too.
+                // The pair style's multi-contact pass serves the walls too: another value here
+                // would be ignored.
                 ("geometryTolerance", Some(x)) => {
-                    geometry_tolerance(x)?;
+                    let t = geometry_tolerance(x)?;
+                    if self.pair.as_ref().is_some_and(|g| g.geometry_tolerance.unwrap_or(0.0) != t) {
+                        return Err(format!("wall/gran geometryTolerance {x} differs from the pair style's"));
+                    }
                 }
                 ("updateEvery", Some(x)) => {
                     let k = update_every(x)?;
