@@ -233,30 +233,25 @@ fn int(s: &str) -> R<i64> {
     }
 }
 
-/// Splits a command line into words; a double-quoted string is one word (quotes removed).
+/// Splits a command line into words; a quoted string ("…" or '…') is one word (quotes removed).
 fn words(line: &str) -> R<Vec<String>> {
-    // LAMMPS quoting: "…" or '…' make one word; inside one kind, the other is a plain character.
     let mut out = Vec::new();
     let mut cur = String::new();
-    let mut quote: Option<char> = None;
+    let mut quotes = Quotes::default();
     let mut had = false;
     for c in line.chars() {
-        match quote {
-            Some(q) if c == q => quote = None,
-            None if c == '"' || c == '\'' => {
-                quote = Some(c);
-                had = true;
+        if quotes.mark(c) {
+            had = true;
+        } else if !quotes.open() && c.is_whitespace() {
+            if had || !cur.is_empty() {
+                out.push(std::mem::take(&mut cur));
+                had = false;
             }
-            None if c.is_whitespace() => {
-                if had || !cur.is_empty() {
-                    out.push(std::mem::take(&mut cur));
-                    had = false;
-                }
-            }
-            _ => cur.push(c),
+        } else {
+            cur.push(c);
         }
     }
-    if let Some(q) = quote {
+    if let Some(q) = quotes.0 {
         return Err(format!("unterminated quote {q}"));
     }
     if had || !cur.is_empty() {
@@ -267,16 +262,33 @@ fn words(line: &str) -> R<Vec<String>> {
 
 /// Strips a `#` comment that is not inside quotes.
 fn strip_comment(line: &str) -> &str {
-    let mut quote: Option<char> = None;
+    let mut quotes = Quotes::default();
     for (k, c) in line.char_indices() {
-        match quote {
-            Some(q) if c == q => quote = None,
-            None if c == '"' || c == '\'' => quote = Some(c),
-            None if c == '#' => return &line[..k],
-            _ => {}
+        if !quotes.mark(c) && !quotes.open() && c == '#' {
+            return &line[..k];
         }
     }
     line
+}
+
+/// LAMMPS quoting: "…" or '…' enclose text; inside one kind, the other is a plain character.
+#[derive(Default)]
+struct Quotes(Option<char>);
+
+impl Quotes {
+    /// Feeds one character; true if it is a quote mark that opened or closed a quote.
+    fn mark(&mut self, c: char) -> bool {
+        match self.0 {
+            Some(q) if c == q => self.0 = None,
+            None if c == '"' || c == '\'' => self.0 = Some(c),
+            _ => return false,
+        }
+        true
+    }
+
+    fn open(&self) -> bool {
+        self.0.is_some()
+    }
 }
 
 struct Resolver<'a> {
