@@ -340,6 +340,27 @@ fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
     assert!(e <= 0.02, "NRMSE {e}");
 }
 
+/// `statestroke N` writes the state after stroke N (the nonlocal compression starts from it): the
+/// write is a zero-step run inside an `if`, which LIGGGHTS runs only when spelled out there (it
+/// refuses `include` inside `if`).
+#[test]
+fn hydrogel_deck_writes_the_state_after_a_stroke() {
+    let tmp = TempDir::new().unwrap();
+    let vars = [("stroke", "300"), ("strokes", "2"), ("statestroke", "1"), ("statefile", "state.dump")];
+    run_ok(tmp.path(), "hydrogel.in", &vars);
+    let frames = read_dump(&tmp.path().join("state.dump"));
+    assert_eq!(frames.len(), 1);
+    let f = &frames[0];
+    let id = f.column("id").unwrap();
+    let mut ids: Vec<i64> = f.rows.iter().map(|r| r[id] as i64).collect();
+    ids.sort_unstable();
+    assert_eq!(ids, (1..=514).collect::<Vec<_>>());
+    for c in ["radius", "x", "y", "z", "vx", "vy", "vz"] {
+        let k = f.column(c).unwrap_or_else(|| panic!("no column {c}"));
+        assert!(f.rows.iter().all(|r| r[k].is_finite()), "{c}");
+    }
+}
+
 #[test]
 fn hydrogel_approximations_bound_the_piston_force_error_in_the_plugin() {
     // The two approximations of the multi-contact pass (docs/dem.md), on two 3000-step strokes:
