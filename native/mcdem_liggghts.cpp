@@ -258,7 +258,8 @@ public:
     }
 
     ~NormalModel() {
-        if (pair_model_ == this) pair_model_ = NULL;
+        std::map<LAMMPS *, NormalModel *>::iterator it = pair_models_.find(lmp);
+        if (it != pair_models_.end() && it->second == this) pair_models_.erase(it);
         mcdem_influence_cache_free(cache_);
     }
 
@@ -283,7 +284,7 @@ public:
 
     void postSettings(IContactHistorySetup *, ContactModelBase *) {
         if (cmb_->is_wall()) return;
-        pair_model_ = this;
+        pair_models_[lmp] = this;
         // Switches on the library's per-contact radius storage, read by the pair and wall loops
         // for detection, overlap and effective radius; it must be set before the pair's init.
         PairGran *pg = dynamic_cast<PairGran *>(force->pair);
@@ -445,8 +446,9 @@ private:
     // Stops a deck whose wall gives a shared setting (see SharedSetting) another value than the
     // pair style's, instead of ignoring it.
     void check_wall_settings() const {
-        const NormalModel *p = pair_model_;
-        if (!p) return;
+        std::map<LAMMPS *, NormalModel *>::const_iterator it = pair_models_.find(lmp);
+        if (it == pair_models_.end()) return;
+        const NormalModel *p = it->second;
         char mine[64], theirs[64];
         const char *name = NULL;
         if (given_[kMprTest] && signed_test_ != p->signed_test_) {
@@ -747,11 +749,12 @@ private:
     std::vector<uint8_t> fallback_;
     // Which shared settings this model's deck line gave (SharedSetting order).
     bool given_[kSharedSettings];
-    // The pair style's model (set when its settings are parsed), whose shared settings apply.
-    static NormalModel *pair_model_;
+    // The pair style's model of each LIGGGHTS instance (set when its settings are parsed), whose
+    // shared settings apply to the instance's walls. Keyed by instance: a program may open several.
+    static std::map<LAMMPS *, NormalModel *> pair_models_;
 };
 
-NormalModel<MC_ADVANCED> *NormalModel<MC_ADVANCED>::pair_model_ = NULL;
+std::map<LAMMPS *, NormalModel<MC_ADVANCED> *> NormalModel<MC_ADVANCED>::pair_models_;
 
 }  // namespace ContactModels
 }  // namespace LIGGGHTS
