@@ -119,15 +119,21 @@ fn update_every_is_checked_and_belongs_to_mc_advanced() {
     }
     // Walls share the pair style's pass: a different value is a contradiction, not a setting.
     let wall = "fix w all wall/gran model mc_advanced tangential history primitive type 1 zplane -0.01 updateEvery 5";
-    let walls = mc("updateEvery 10").replace("run 1\n", &format!("{wall}\nrun 1\n"));
-    let (ok, out) = run_deck(&walls, &[]);
+    let with_wall = |wall: &str| mc("updateEvery 10").replace("run 1\n", &format!("{wall}\nrun 1\n"));
+    let (ok, out) = run_deck(&with_wall(wall), &[]);
     assert!(!ok && out.contains("wall/gran updateEvery 5 differs from the pair style's"), "{out}");
     let tol = wall.replace("updateEvery 5", "geometryTolerance 1e-3");
-    let (ok, out) = run_deck(&mc("updateEvery 10").replace("run 1\n", &format!("{tol}\nrun 1\n")), &[]);
+    let (ok, out) = run_deck(&with_wall(&tol), &[]);
+    assert!(!ok && out.contains("wall/gran geometryTolerance 1e-3 differs from the pair style's"), "{out}");
+    // Settings before the geometry count the same.
+    let before = wall
+        .replace("history primitive", "history geometryTolerance 1e-3 primitive")
+        .replace(" updateEvery 5", "");
+    let (ok, out) = run_deck(&with_wall(&before), &[]);
     assert!(!ok && out.contains("wall/gran geometryTolerance 1e-3 differs from the pair style's"), "{out}");
     // Repeating the pair style's values is fine.
     let same = wall.replace("updateEvery 5", "updateEvery 10 geometryTolerance 0");
-    let (ok, out) = run_deck(&mc("updateEvery 10").replace("run 1\n", &format!("{same}\nrun 1\n")), &[]);
+    let (ok, out) = run_deck(&with_wall(&same), &[]);
     assert!(ok, "{out}");
     // The command-line approximations belong to mc_advanced as well.
     let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--mc-update-every", "5"]);

@@ -128,6 +128,53 @@ struct GranModel {
     update_every: Option<u64>,
 }
 
+impl GranModel {
+    /// One model setting `key value` of a `pair_style gran` or `fix wall/gran` line; false if `key`
+    /// is not a model setting (the caller decides what else it may be).
+    fn setting(&mut self, key: &str, v: Option<&str>) -> R<bool> {
+        match (key, v) {
+            ("mprTest", Some(x)) => self.mpr_test = x.parse()?,
+            ("geometryTolerance", Some(x)) => self.geometry_tolerance = Some(geometry_tolerance(x)?),
+            ("updateEvery", Some(x)) => self.update_every = Some(update_every(x)?),
+            ("pairRadii", Some("modified")) => self.stock_pair_radii = false,
+            ("pairRadii", Some("stock")) => self.stock_pair_radii = true,
+            ("pairRadii", Some(x)) => {
+                return Err(format!("pairRadii must be 'modified' or 'stock', got '{x}'"))
+            }
+            // LIGGGHTS' default for hertz; the core always applies tangential damping.
+            ("tangential_damping", Some("on")) => {}
+            _ => return Ok(false),
+        }
+        Ok(true)
+    }
+
+    /// The combination is one the engines run, and every setting belongs to the chosen model.
+    fn check(&self) -> R<()> {
+        if !matches!(self.model.as_str(), "hertz" | "mc_advanced") {
+            return Err(unsupported(&format!("granular model '{}' (hertz or mc_advanced)", self.model)));
+        }
+        if !matches!(self.tangential.as_str(), "history" | "no_history") {
+            return Err(unsupported(&format!(
+                "tangential model '{}' (history or no_history)",
+                self.tangential
+            )));
+        }
+        if self.stock_pair_radii && self.model != "mc_advanced" {
+            return Err("pairRadii is a setting of model mc_advanced".into());
+        }
+        if self.geometry_tolerance.is_some() && self.model != "mc_advanced" {
+            return Err("geometryTolerance is a setting of model mc_advanced".into());
+        }
+        if self.update_every.is_some() && self.model != "mc_advanced" {
+            return Err("updateEvery is a setting of model mc_advanced".into());
+        }
+        if self.model == "mc_advanced" && self.surface_mc {
+            return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
+        }
+        Ok(())
+    }
+}
+
 /// `geometryTolerance` value: a finite number ≥ 0 (a fraction of the particle radius).
 fn geometry_tolerance(x: &str) -> R<f64> {
     match x.parse::<f64>() {
@@ -1073,38 +1120,15 @@ impl Deck {
                 ("cohesion", Some("off")) | ("rolling_friction", Some("off")) => {}
                 ("surface", Some("default")) => m.surface_mc = false,
                 ("surface", Some("multicontact")) => m.surface_mc = true,
-                ("mprTest", Some(x)) => m.mpr_test = x.parse()?,
-                ("geometryTolerance", Some(x)) => m.geometry_tolerance = Some(geometry_tolerance(x)?),
-                ("updateEvery", Some(x)) => m.update_every = Some(update_every(x)?),
-                ("pairRadii", Some("modified")) => m.stock_pair_radii = false,
-                ("pairRadii", Some("stock")) => m.stock_pair_radii = true,
-                ("pairRadii", Some(x)) => {
-                    return Err(format!("pairRadii must be 'modified' or 'stock', got '{x}'"))
+                (key, v) => {
+                    if !m.setting(key, v)? {
+                        break;
+                    }
                 }
-                // LIGGGHTS' default for hertz; the core always applies tangential damping.
-                ("tangential_damping", Some("on")) => {}
-                _ => break,
             }
             k += 2;
         }
-        if !matches!(m.model.as_str(), "hertz" | "mc_advanced") {
-            return Err(unsupported(&format!("granular model '{}' (hertz or mc_advanced)", m.model)));
-        }
-        if !matches!(m.tangential.as_str(), "history" | "no_history") {
-            return Err(unsupported(&format!("tangential model '{}' (history or no_history)", m.tangential)));
-        }
-        if m.stock_pair_radii && m.model != "mc_advanced" {
-            return Err("pairRadii is a setting of model mc_advanced".into());
-        }
-        if m.geometry_tolerance.is_some() && m.model != "mc_advanced" {
-            return Err("geometryTolerance is a setting of model mc_advanced".into());
-        }
-        if m.update_every.is_some() && m.model != "mc_advanced" {
-            return Err("updateEvery is a setting of model mc_advanced".into());
-        }
-        if m.model == "mc_advanced" && m.surface_mc {
-            return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
-        }
+        m.check()?;
         Ok((m, k))
     }
 
@@ -1293,18 +1317,7 @@ impl Deck {
     }
 
     fn wall_gran(&mut self, a: &[&str]) -> R<FixKind> {
-        let (m, mut k) = Self::gran_model(a, 4)?;
-        // The wall runs the pair style's model: the same law and sub-models. Settings may be given
-        // before or after the geometry; mprTest must then agree, pairRadii concerns pairs only.
-        let same = |p: &GranModel| {
-            (&p.model, &p.tangential, p.surface_mc) == (&m.model, &m.tangential, m.surface_mc)
-                && (p.mpr_test == m.mpr_test || !a[4..k].contains(&"mprTest"))
-        };
-        match &self.pair {
-            Some(p) if same(p) => {}
-            Some(_) => return Err(unsupported("a wall model different from the pair model")),
-            None => return Err("fix wall/gran before pair_style gran".into()),
-        }
+        let (mut m, mut k) = Self::gran_model(a, 4)?;
         let geom = match a.get(k) {
             Some(&"primitive") => {
                 if a.len() < k + 5 || a[k + 1] != "type" {
@@ -1340,36 +1353,32 @@ impl Deck {
             }
             _ => return Err("wall/gran: expected 'primitive' or 'mesh'".into()),
         };
-        // Model settings may follow the geometry (LIGGGHTS accepts them at the end of the line);
-        // the wall uses the pair style's model, so only settings that agree with it are accepted.
+        // Model settings may also follow the geometry (LIGGGHTS accepts them at the end of the line).
         while k < a.len() {
-            match (a[k], a.get(k + 1).copied()) {
-                ("tangential_damping", Some("on")) => {}
-                ("mprTest", Some(x)) => {
-                    let t: MprTest = x.parse()?;
-                    if self.pair.as_ref().is_some_and(|g| g.mpr_test != t) {
-                        return Err(format!("wall/gran mprTest {x} differs from the pair style's"));
-                    }
-                }
-                // Pairs only: a wall contact always uses the particle's modified radius.
-                ("pairRadii", Some("modified" | "stock")) => {}
-                // The pair style's multi-contact pass serves the walls too: another value here
-                // would be ignored.
-                ("geometryTolerance", Some(x)) => {
-                    let t = geometry_tolerance(x)?;
-                    if self.pair.as_ref().is_some_and(|g| g.geometry_tolerance.unwrap_or(0.0) != t) {
-                        return Err(format!("wall/gran geometryTolerance {x} differs from the pair style's"));
-                    }
-                }
-                ("updateEvery", Some(x)) => {
-                    let k = update_every(x)?;
-                    if self.pair.as_ref().is_some_and(|g| g.update_every.unwrap_or(1) != k) {
-                        return Err(format!("wall/gran updateEvery {x} differs from the pair style's"));
-                    }
-                }
-                _ => return Err(unsupported(&format!("wall/gran keyword {}", a[k]))),
+            if !m.setting(a[k], a.get(k + 1).copied())? {
+                return Err(unsupported(&format!("wall/gran keyword {}", a[k])));
             }
             k += 2;
+        }
+        m.check()?;
+        // The wall runs the pair style's model: the same law and sub-models. The pair style's
+        // multi-contact pass serves the walls too, so a wall may repeat its mprTest,
+        // geometryTolerance and updateEvery but not give other values (they would be ignored);
+        // pairRadii concerns pairs only.
+        let Some(p) = &self.pair else { return Err("fix wall/gran before pair_style gran".into()) };
+        if (&p.model, &p.tangential, p.surface_mc) != (&m.model, &m.tangential, m.surface_mc) {
+            return Err(unsupported("a wall model different from the pair model"));
+        }
+        let given = |key: &str| a.iter().rposition(|w| *w == key).and_then(|i| a.get(i + 1));
+        let agrees = [
+            ("mprTest", p.mpr_test == m.mpr_test),
+            ("geometryTolerance", p.geometry_tolerance.unwrap_or(0.0) == m.geometry_tolerance.unwrap_or(0.0)),
+            ("updateEvery", p.update_every.unwrap_or(1) == m.update_every.unwrap_or(1)),
+        ];
+        for (key, same) in agrees {
+            if let (Some(x), false) = (given(key), same) {
+                return Err(format!("wall/gran {key} {x} differs from the pair style's"));
+            }
         }
         self.world.walls.push(WallFix { name: a[1].into(), geom });
         Ok(FixKind::Wall(self.world.walls.len() - 1))
