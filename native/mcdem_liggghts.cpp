@@ -102,7 +102,8 @@ struct RowsTag {
 };
 template struct PrivateAccess<RowsTag, &FixContactHistory::contacthistory_>;
 
-// A keyword with two named options (`mprTest abs|signed`, `pairRadii modified|stock`).
+// A keyword with two named options (`mprTest abs|signed`, `pairRadii modified|stock`); `given`, if
+// not NULL, records that the deck line gave it.
 class ChoiceSetting : public Setting {
 public:
     ChoiceSetting(const char *name, const char *off, const char *on, bool *target, bool *given)
@@ -112,7 +113,7 @@ public:
         const char *v = args[1];
         if (v && (off_ == v || on_ == v)) {
             *target_ = on_ == v;
-            *given_ = true;
+            if (given_) *given_ = true;
             return 2;
         }
         error_message = "model mc_advanced: " + name + " must be '" + off_ + "' or '" + on_ + "', got '" +
@@ -190,7 +191,7 @@ const double kContactDistanceFactor = 1.2;
 // Model settings that only the pair style's model applies: it computes the radius changes of every
 // contact, walls included. A wall may repeat them but not give other values (they would be ignored).
 // pairRadii concerns pairs only (a wall contact always uses the modified radius): walls may give any.
-enum SharedSetting { kMprTest, kPairRadii, kGeometryTolerance, kUpdateEvery, kSharedSettings };
+enum SharedSetting { kMprTest, kGeometryTolerance, kUpdateEvery, kSharedSettings };
 
 }  // namespace
 
@@ -271,7 +272,7 @@ public:
             table["mprTest"] = new ChoiceSetting("mprTest", "abs", "signed", &signed_test_, &given_[kMprTest]);
         if (table.find("pairRadii") == table.end())
             table["pairRadii"] =
-                new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_, &given_[kPairRadii]);
+                new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_, NULL);
         if (table.find("geometryTolerance") == table.end())
             table["geometryTolerance"] = new StrictSetting<double, parse_nonnegative>(
                 "geometryTolerance", &geometry_tolerance_, &given_[kGeometryTolerance],
