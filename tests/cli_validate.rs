@@ -59,6 +59,20 @@ fn quick_validation_writes_the_report_contract() {
     for m in ["hertz", "standard_mc", "mc_advanced", "nonlocal_boussinesq"] {
         assert!(models.contains(&m), "bcc: {m} missing from {models:?}");
     }
+    // Both die cases scan standard MC across γ: the best γ against each reference, inside the
+    // scanned 0.5 … 1.25, with its NRMSE, its rows in the CSV and its plot.
+    for case in ["single_particle", "bcc"] {
+        let c = cases.iter().find(|c| c["name"] == case).unwrap();
+        let mc = c["models"].as_array().unwrap().iter().find(|m| m["model"] == "standard_mc").unwrap();
+        for k in ["sphere", "boussinesq"] {
+            let gamma = mc["metrics"][format!("gamma_scan_best_gamma_{k}")].as_f64().unwrap();
+            let e = mc["metrics"][format!("gamma_scan_best_nrmse_{k}")].as_f64().unwrap();
+            assert!((0.5..=1.25).contains(&gamma) && e.is_finite() && e >= 0.0, "{case} vs {k}: {mc}");
+        }
+        let csv = std::fs::read_to_string(out.join(format!("{case}.csv"))).unwrap();
+        assert!(csv.lines().filter(|l| l.contains(",standard_mc_gamma_scan,")).count() >= 16 * 4, "{case}");
+        assert!(out.join(format!("{case}_gamma_scan.png")).is_file());
+    }
 }
 
 #[test]
