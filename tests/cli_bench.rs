@@ -64,6 +64,17 @@ fn quick_bench_writes_rows_and_ratios() {
         if std::process::Command::new("liggghts").arg("-h").output().is_ok() {
             assert!(has("liggghts", "hertz", "hydrogel_514"));
             assert!(ratios.contains_key("hertz: rust 1 thread / liggghts"));
+            // Both cores as MPI ranks too, side by side with the Rust engine's two threads.
+            if std::process::Command::new("mpirun").arg("--version").output().is_ok() {
+                let two = rows.iter().any(|r| {
+                    r["engine"] == "liggghts"
+                        && r["model"] == "hertz"
+                        && r["scene"] == "hydrogel_514"
+                        && r["threads"] == 2
+                });
+                assert!(two, "liggghts hertz on 2 ranks");
+                assert!(ratios.contains_key("hertz: rust 2 threads / liggghts 2 ranks"));
+            }
         }
     }
     // The packing deck: both engines on the same data file, both core counts, with their ratios.

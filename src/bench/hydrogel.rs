@@ -38,6 +38,20 @@ pub(super) fn on_path(name: &str) -> bool {
     Command::new(name).arg("-h").output().is_ok()
 }
 
+/// Whether `mpirun` can be started.
+pub(super) fn mpirun_available() -> bool {
+    Command::new("mpirun").arg("--version").output().is_ok_and(|o| o.status.success())
+}
+
+/// `exe` on two MPI ranks. The ranks yield when idle and are not pinned, so that a rank waiting in
+/// a collective does not spin on the core the other one needs (2-core machines).
+pub(super) fn on_two_ranks(exe: &Path) -> Command {
+    let mut c = Command::new("mpirun");
+    c.args(["--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np", "2"]);
+    c.env("OMPI_MCA_mpi_yield_when_idle", "1").arg(exe);
+    c
+}
+
 /// Runs one deck; returns (seconds, particle-steps per second, piston force column of the deck's
 /// `fix ave/time` file).
 fn measure_force(cmd: &mut Command, what: &str) -> Result<(f64, f64, Vec<f64>), String> {
@@ -143,7 +157,29 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                 c.arg("-in").arg(&deck).args(vars("0")).args(["-log", "none"]);
                 c.args(["-var", "geomtol", &tol.to_string(), "-var", "mcevery", &every.to_string()]);
                 let run = measure_force(&mut c, &format!("liggghts {model}"))?;
-                approximate_row(report, say, "liggghts", &model, &exact, run);
+                approximate_row(report, say, "liggghts", &model, 1, &exact, run);
+            }
+            // Both cores as MPI ranks: stock Hertz, and the plugin with the fastest approximation
+            // (its piston-force error against the exact one-rank run: the decomposition reorders
+            // sums, the approximation does the rest).
+            if mpirun_available() {
+                if let Some(exe) = &stock {
+                    let mut c = on_two_ranks(exe);
+                    c.arg("-in").arg(&deck).args(vars("1")).args(["-log", "none"]);
+                    let (t, rate, _) = measure_force(&mut c, "liggghts hertz, 2 ranks")?;
+                    say(&format!("hydrogel, liggghts hertz, 2 ranks: {rate:.3e} particle-steps/s"));
+                    push(report, "liggghts", "hertz", 2, (t, rate));
+                }
+                if let (Some(exe), Some(&(tol, every, _))) = (&plugin, APPROXIMATIONS.last()) {
+                    let model = approximate_model(tol, every);
+                    let mut c = on_two_ranks(exe);
+                    c.arg("-in").arg(&deck).args(vars("0")).args(["-log", "none"]);
+                    c.args(["-var", "geomtol", &tol.to_string(), "-var", "mcevery", &every.to_string()]);
+                    let run = measure_force(&mut c, &format!("liggghts {model}, 2 ranks"))?;
+                    approximate_row(report, say, "liggghts", &model, 2, &exact, run);
+                }
+            } else {
+                report.notes.push("hydrogel: mpirun not found, LIGGGHTS on one rank only".into());
             }
         }
     }
@@ -172,7 +208,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
     for (tol, every, _) in APPROXIMATIONS {
         let model = approximate_model(tol, every);
         let run = rust("0", 1, (tol, every), &model)?;
-        approximate_row(report, say, "rust", &model, &exact, run);
+        approximate_row(report, say, "rust", &model, 1, &exact, run);
     }
     Ok(())
 }
@@ -191,22 +227,26 @@ fn push(report: &mut Report, engine: &'static str, model: &str, threads: usize, 
     })
 }
 
-/// An approximate `mc_advanced` row (one thread) with its piston-force error against the same
-/// engine's exact run, `exact`.
+/// An approximate `mc_advanced` row on `threads` threads or ranks, with its piston-force error
+/// against the same engine's exact run on one, `exact`.
 fn approximate_row(
     report: &mut Report,
     say: &mut dyn FnMut(&str),
     engine: &'static str,
     model: &str,
+    threads: usize,
     exact: &[f64],
     (t, rate, force): (f64, f64, Vec<f64>),
 ) {
     let err = force_error(exact, &force);
+    let cores = if threads > 1 { format!(", {threads} cores") } else { String::new() };
     say(&format!(
-        "hydrogel, {engine} {model}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"
+        "hydrogel, {engine} {model}{cores}: {rate:.3e} particle-steps/s, piston force error {err:.2e} of its range"
     ));
-    push(report, engine, model, 1, (t, rate));
-    report.errors.insert(format!("hydrogel {engine} {model}: max piston-force error / range vs exact"), err);
+    push(report, engine, model, threads, (t, rate));
+    report
+        .errors
+        .insert(format!("hydrogel {engine} {model}{cores}: max piston-force error / range vs exact"), err);
 }
 
 #[cfg(test)]

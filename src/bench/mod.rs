@@ -106,6 +106,9 @@ fn ratios(r: &mut Report) {
         ("rust 1 thread: standard_mc / hertz", ("rust", "standard_mc", 1), ("rust", "hertz", 1)),
         ("hertz: rust 1 thread / liggghts", ("rust", "hertz", 1), ("liggghts", "hertz", 1)),
         ("hertz: rust 2 threads / liggghts", ("rust", "hertz", 2), ("liggghts", "hertz", 1)),
+        ("hertz: rust 2 threads / liggghts 2 ranks", ("rust", "hertz", 2), ("liggghts", "hertz", 2)),
+        ("liggghts: hertz 2 ranks / 1 rank", ("liggghts", "hertz", 2), ("liggghts", "hertz", 1)),
+        ("rust: hertz 2 threads / 1 thread", ("rust", "hertz", 2), ("rust", "hertz", 1)),
         ("mc_advanced: rust 1 thread / liggghts", ("rust", "mc_advanced", 1), ("liggghts", "mc_advanced", 1)),
     ];
     for (name, (e1, m1, t1), (e2, m2, t2)) in pairs {
@@ -119,6 +122,9 @@ fn ratios(r: &mut Report) {
             if let Some(v) = cost(find(r, engine, &m, h, 1), find(r, engine, "hertz", h, 1)) {
                 out.insert(format!("{label}: {m} / hertz"), v);
             }
+        }
+        if let Some(v) = cost(find(r, "liggghts", &m, h, 2), find(r, "liggghts", "hertz", h, 2)) {
+            out.insert(format!("liggghts 2 ranks: {m} / hertz"), v);
         }
     }
     // Cost per particle-step across packing sizes, relative to the smallest (1 thread).

@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
 
-use super::hydrogel::{loop_time, on_path, sibling};
+use super::hydrogel::{loop_time, mpirun_available, on_path, on_two_ranks, sibling};
 use super::{Options, Report, Row};
 use crate::engine::{Closure, Domain, World};
 use crate::physics::ghods2022::MprTest;
@@ -141,7 +141,7 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
         report.notes.push("packing deck rows skipped: neither liggghts nor mcdem-liggghts found".into());
         return Ok(());
     };
-    let mpi = Command::new("mpirun").arg("--version").output().is_ok_and(|o| o.status.success());
+    let mpi = mpirun_available();
     let me = std::env::current_exe().map_err(|e| e.to_string())?;
     let work = std::env::temp_dir().join(format!("mcdem-bench-packing-{}", std::process::id()));
     std::fs::create_dir_all(&work).map_err(|e| e.to_string())?;
@@ -171,9 +171,7 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
             deck_args(&mut c);
             runs.push(("liggghts", 1, c));
             if mpi {
-                let mut c = Command::new("mpirun");
-                c.args(["--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np", "2"]);
-                c.env("OMPI_MCA_mpi_yield_when_idle", "1").arg(&liggghts);
+                let mut c = on_two_ranks(&liggghts);
                 deck_args(&mut c);
                 runs.push(("liggghts", 2, c));
             }
