@@ -136,12 +136,19 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                     .notes
                     .push("LIGGGHTS mc_advanced row skipped: build mcdem-liggghts (feature liggghts)".into());
             }
+            // A LIGGGHTS run's arguments: the law, and for the plugin an approximation (tol, every).
+            let deck_args = |c: &mut Command, law: &str, approx: Option<(f64, u64)>| {
+                c.arg("-in").arg(&deck).args(vars(law)).args(["-log", "none"]);
+                if let Some((tol, every)) = approx {
+                    c.args(["-var", "geomtol", &tol.to_string(), "-var", "mcevery", &every.to_string()]);
+                }
+            };
             let mut exact = Vec::new();
             for (law, model) in LAWS {
                 let exe = if law == "0" { plugin.as_ref() } else { stock.as_ref() };
                 let Some(exe) = exe else { continue };
                 let mut c = Command::new(exe);
-                c.arg("-in").arg(&deck).args(vars(law)).args(["-log", "none"]);
+                deck_args(&mut c, law, None);
                 let (t, rate, force) = measure_force(&mut c, &format!("liggghts {model}"))?;
                 say(&format!("hydrogel, liggghts {model}: {rate:.3e} particle-steps/s"));
                 push(report, "liggghts", model, 1, (t, rate));
@@ -154,8 +161,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                 let Some(exe) = plugin.as_ref() else { break };
                 let model = approximate_model(*tol, *every);
                 let mut c = Command::new(exe);
-                c.arg("-in").arg(&deck).args(vars("0")).args(["-log", "none"]);
-                c.args(["-var", "geomtol", &tol.to_string(), "-var", "mcevery", &every.to_string()]);
+                deck_args(&mut c, "0", Some((*tol, *every)));
                 let run = measure_force(&mut c, &format!("liggghts {model}"))?;
                 approximate_row(report, say, "liggghts", &model, 1, &exact, run);
             }
@@ -165,7 +171,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
             if mpirun_available() {
                 if let Some(exe) = &stock {
                     let mut c = on_two_ranks(exe);
-                    c.arg("-in").arg(&deck).args(vars("1")).args(["-log", "none"]);
+                    deck_args(&mut c, "1", None);
                     let (t, rate, _) = measure_force(&mut c, "liggghts hertz, 2 ranks")?;
                     say(&format!("hydrogel, liggghts hertz, 2 ranks: {rate:.3e} particle-steps/s"));
                     push(report, "liggghts", "hertz", 2, (t, rate));
@@ -173,8 +179,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                 if let (Some(exe), Some(&(tol, every, _))) = (&plugin, APPROXIMATIONS.last()) {
                     let model = approximate_model(tol, every);
                     let mut c = on_two_ranks(exe);
-                    c.arg("-in").arg(&deck).args(vars("0")).args(["-log", "none"]);
-                    c.args(["-var", "geomtol", &tol.to_string(), "-var", "mcevery", &every.to_string()]);
+                    deck_args(&mut c, "0", Some((tol, every)));
                     let run = measure_force(&mut c, &format!("liggghts {model}, 2 ranks"))?;
                     approximate_row(report, say, "liggghts", &model, 2, &exact, run);
                 }
