@@ -34,7 +34,8 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
             model: format!("nonlocal_{}", kind.name()),
             scene: SCENE.into(),
             n: spheres.len(),
-            threads: 1,
+            // FIRE's force evaluation runs on the rayon pool (Newton's sparse LU on one thread).
+            threads: rayon::current_num_threads(),
             particle_steps_per_s: (spheres.len() * points.len()) as f64 / secs,
             wall_time_s: secs,
             memory_bytes_per_particle: None,

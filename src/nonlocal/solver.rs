@@ -53,6 +53,32 @@ const FIRE_STALL_DT: f64 = 1e-4;
 /// ... and the residual has not reached a new low (by 1 %) for this many steps.
 const FIRE_STALL_STEPS: usize = 2000;
 
+/// FIRE's force evaluation on the rayon pool: contacts per work item at least, and particles per
+/// block of kernel sums. A step of the 514-particle compression has a few thousand candidates, so
+/// two threads get work items of tens of microseconds, well above the cost of handing them out.
+const FIRE_MIN_LEN: usize = 512;
+const FIRE_BLOCK: usize = 64;
+
+/// The buffers of [`Nonlocal::fire_forces`], kept across the steps of one relaxation so that a
+/// step allocates nothing.
+#[derive(Default)]
+struct FireScratch {
+    /// Per candidate: its geometry, if its gap may close.
+    geo: Vec<Option<Geo>>,
+    /// Loaded contacts per particle, compressed rows: (contact, direction from the particle).
+    adj_start: Vec<usize>,
+    adj: Vec<(usize, Vec3)>,
+    fill: Vec<usize>,
+    /// Per row entry, then per contact and side: the approach from the particle's other loads.
+    app: Vec<f64>,
+    app_i: Vec<f64>,
+    app_j: Vec<f64>,
+    /// Per particle: the lowest possible approach (see `fire_forces`).
+    floor: Vec<f64>,
+    /// Net force per particle.
+    f: Vec<Vec3>,
+}
+
 /// One sphere of the scene (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sphere {
@@ -1037,18 +1063,24 @@ impl Nonlocal {
     /// of every particle whose geometric overlap exceeds −`margin`, P = K max(δ, 0)^{3/2} with
     /// δ = γ − Σ G P_lagged (the nonlocal approach from the forces of the previous FIRE step, `lag`,
     /// indexed like the candidates: pairs first, then particle × wall; all zero for Hertz).
-    /// Returns the net forces (with body forces), the mean contact force, and writes the new
-    /// forces and Hertz overlaps into `p_out`, `d_out`.
+    /// Leaves the net forces (with body forces) in `s.f`, returns the mean contact force, and
+    /// writes the new forces and Hertz overlaps into `p_out`, `d_out`.
+    ///
+    /// The per-contact and per-particle work (geometry, kernel sums, overlaps) runs on the rayon
+    /// pool; every value is computed as in a serial pass and the forces are summed serially in
+    /// contact order, so the result does not depend on the number of threads, bit for bit.
     #[allow(clippy::too_many_arguments)]
     fn fire_forces(
         &self,
+        s: &mut FireScratch,
         x: &[Vec3],
         candidates: &[(usize, usize)],
         lag: &[f64],
         margin: f64,
         p_out: &mut [f64],
         d_out: &mut [f64],
-    ) -> (Vec<Vec3>, f64) {
+    ) -> f64 {
+        use rayon::prelude::*;
         let n = x.len();
         let nw = self.walls.len();
         let np = candidates.len();
@@ -1060,113 +1092,179 @@ impl Nonlocal {
             }
         };
         let total = np + n * nw;
-        let geo: Vec<Option<Geo>> = (0..total)
+        (0..total)
+            .into_par_iter()
+            .with_min_len(FIRE_MIN_LEN)
             .map(|k| {
                 let (i, o) = other_of(k);
                 let g = self.geometry(x, i, o);
                 (g.gamma > -margin).then_some(g)
             })
-            .collect();
-        // Per particle: the loaded contacts of the previous step (index, direction from the particle).
+            .collect_into_vec(&mut s.geo);
+        let geo = &s.geo;
+        // Per particle, in compressed rows: the loaded contacts of the previous step (index,
+        // direction from the particle), in contact order.
         let nonlocal = !self.kernel.is_zero();
-        let mut adj: Vec<Vec<(usize, Vec3)>> = vec![Vec::new(); if nonlocal { n } else { 0 }];
+        s.adj_start.clear();
+        s.adj.clear();
         if nonlocal {
+            s.adj_start.resize(n + 1, 0);
+            for k in 0..total {
+                if let (Some(_), true) = (&geo[k], lag[k] > 0.0) {
+                    let (i, o) = other_of(k);
+                    s.adj_start[i + 1] += 1;
+                    if let Other::Particle(j) = o {
+                        s.adj_start[j + 1] += 1;
+                    }
+                }
+            }
+            for i in 0..n {
+                s.adj_start[i + 1] += s.adj_start[i];
+            }
+            s.adj.resize(s.adj_start[n], (0, Vec3::zeros()));
+            s.fill.clear();
+            s.fill.extend_from_slice(&s.adj_start[..n]);
             for k in 0..total {
                 if let (Some(g), true) = (&geo[k], lag[k] > 0.0) {
                     let (i, o) = other_of(k);
-                    adj[i].push((k, g.e));
+                    s.adj[s.fill[i]] = (k, g.e);
+                    s.fill[i] += 1;
                     if let Other::Particle(j) = o {
-                        adj[j].push((k, -g.e));
+                        s.adj[s.fill[j]] = (k, -g.e);
+                        s.fill[j] += 1;
                     }
                 }
             }
         }
-        let approach = |s: usize, c: usize, dir: &Vec3| -> f64 {
-            adj[s]
+        let (adj, start) = (&s.adj, &s.adj_start);
+        let list = |p: usize| &adj[start[p]..start[p + 1]];
+        let approach = |p: usize, c: usize, dir: &Vec3| -> f64 {
+            list(p)
                 .iter()
                 .filter(|(k, _)| *k != c)
-                .map(|(k, e)| self.bound[s].value(dir.dot(e)) * lag[*k])
+                .map(|(k, e)| self.bound[p].value(dir.dot(e)) * lag[*k])
                 .sum()
         };
-        // The approach at the loaded contacts themselves, with every pair's kernel value computed once
-        // (G depends on the pair's direction cosine only): the same values, summed in the same
-        // order, as `approach`, at half the kernel evaluations. Indexed by contact: the side of its
-        // first particle, then of the second.
-        let (mut app_i, mut app_j) = (Vec::new(), Vec::new());
+        // The approach at the loaded contacts themselves, with every pair's kernel value computed
+        // once (G depends on the pair's direction cosine only): the same values, summed in the same
+        // order, as `approach`, at half the kernel evaluations. One value per row entry, then
+        // indexed by contact: the side of its first particle, then of the second.
+        s.app.clear();
+        s.app_i.clear();
+        s.app_j.clear();
         if nonlocal {
-            app_i.resize(total, 0.0);
-            app_j.resize(total, 0.0);
-            let mut vals: Vec<f64> = Vec::new();
-            for (s, list) in adj.iter().enumerate() {
-                let z = list.len();
-                vals.clear();
-                vals.resize(z * z, 0.0);
-                for p in 0..z {
-                    for q in p + 1..z {
-                        let v = self.bound[s].value(list[p].1.dot(&list[q].1));
-                        vals[p * z + q] = v;
-                        vals[q * z + p] = v;
+            s.app.resize(adj.len(), 0.0);
+            // Rows in blocks of particles, each block writing its own entries.
+            let mut blocks: Vec<(usize, &mut [f64])> = Vec::with_capacity(n.div_ceil(FIRE_BLOCK));
+            let mut rest: &mut [f64] = &mut s.app;
+            for b in (0..n).step_by(FIRE_BLOCK) {
+                let end = (b + FIRE_BLOCK).min(n);
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(start[end] - start[b]);
+                blocks.push((b, head));
+                rest = tail;
+            }
+            blocks.into_par_iter().for_each_init(Vec::new, |vals: &mut Vec<f64>, (b, out)| {
+                let mut at = 0;
+                for p in b..(b + FIRE_BLOCK).min(n) {
+                    let row = list(p);
+                    let z = row.len();
+                    vals.clear();
+                    vals.resize(z * z, 0.0);
+                    for a in 0..z {
+                        for c in a + 1..z {
+                            let v = self.bound[p].value(row[a].1.dot(&row[c].1));
+                            vals[a * z + c] = v;
+                            vals[c * z + a] = v;
+                        }
                     }
+                    for a in 0..z {
+                        out[at + a] =
+                            (0..z).filter(|&c| c != a).map(|c| vals[a * z + c] * lag[row[c].0]).sum();
+                    }
+                    at += z;
                 }
-                for (p, &(k, _)) in list.iter().enumerate() {
-                    let a: f64 = (0..z).filter(|&q| q != p).map(|q| vals[p * z + q] * lag[list[q].0]).sum();
-                    if other_of(k).0 == s {
-                        app_i[k] = a;
+            });
+            s.app_i.resize(total, 0.0);
+            s.app_j.resize(total, 0.0);
+            for p in 0..n {
+                for (&(k, _), &a) in list(p).iter().zip(&s.app[start[p]..start[p + 1]]) {
+                    if other_of(k).0 == p {
+                        s.app_i[k] = a;
                     } else {
-                        app_j[k] = a;
+                        s.app_j[k] = a;
                     }
                 }
             }
         }
         // Per particle: lower bound of the approach at any point, lower_bound · Σ lag (≤ 0).
-        let floor: Vec<f64> = adj
-            .iter()
+        s.floor.clear();
+        if nonlocal {
+            s.floor
+                .extend((0..n).map(|p| {
+                    self.bound[p].lower_bound() * list(p).iter().map(|&(k, _)| lag[k]).sum::<f64>()
+                }));
+        }
+        // Each contact's overlap and force (d_out, p_out), then the sums in contact order.
+        let (app_i, app_j, floor) = (&s.app_i, &s.app_j, &s.floor);
+        d_out[..total]
+            .par_iter_mut()
+            .zip(&mut p_out[..total])
             .enumerate()
-            .map(|(s, list)| self.bound[s].lower_bound() * list.iter().map(|&(k, _)| lag[k]).sum::<f64>())
-            .collect();
-        let mut f: Vec<Vec3> = self.body.iter().map(|b| b * self.body_factor).collect();
+            .with_min_len(FIRE_MIN_LEN)
+            .for_each(|(k, (d_out, p_out))| {
+                *p_out = 0.0;
+                *d_out = f64::NEG_INFINITY;
+                let Some(g) = &geo[k] else { return };
+                let (i, o) = other_of(k);
+                let mut delta = g.gamma;
+                if nonlocal {
+                    let loaded = lag[k] > 0.0;
+                    if !loaded {
+                        // The approach is at least lower_bound · Σ lag at each particle: when even
+                        // the largest possible bulge leaves the gap open, the contact stays
+                        // unloaded (its overlap is not used).
+                        let mut most = g.gamma - floor[i];
+                        if let Other::Particle(j) = o {
+                            most -= floor[j];
+                        }
+                        if most < 0.0 {
+                            *d_out = most;
+                            return;
+                        }
+                    }
+                    delta -= if loaded { app_i[k] } else { approach(i, k, &g.e) };
+                    if let Other::Particle(j) = o {
+                        delta -= if loaded { app_j[k] } else { approach(j, k, &(-g.e)) };
+                    }
+                }
+                *d_out = delta;
+                if delta > 0.0 {
+                    let c = Contact { i, other: o, delta, k: self.stiffness(i, o) };
+                    *p_out = Self::force_of(&c, delta).0;
+                }
+            });
+        s.f.clear();
+        s.f.extend(self.body.iter().map(|b| b * self.body_factor));
         let (mut sum, mut cnt) = (0.0, 0usize);
         for k in 0..total {
-            p_out[k] = 0.0;
-            d_out[k] = f64::NEG_INFINITY;
-            let Some(g) = &geo[k] else { continue };
-            let (i, o) = other_of(k);
-            let mut delta = g.gamma;
-            if nonlocal {
-                let loaded = lag[k] > 0.0;
-                if !loaded {
-                    // The approach is at least lower_bound · Σ lag at each particle: when even the
-                    // largest possible bulge leaves the gap open, the contact stays unloaded (its
-                    // overlap is not used).
-                    let mut most = g.gamma - floor[i];
-                    if let Other::Particle(j) = o {
-                        most -= floor[j];
-                    }
-                    if most < 0.0 {
-                        d_out[k] = most;
-                        continue;
-                    }
-                }
-                delta -= if loaded { app_i[k] } else { approach(i, k, &g.e) };
-                if let Other::Particle(j) = o {
-                    delta -= if loaded { app_j[k] } else { approach(j, k, &(-g.e)) };
-                }
-            }
-            d_out[k] = delta;
-            if delta <= 0.0 {
+            // Overlap positive: a force was computed (d_out is −∞ or negative otherwise).
+            if d_out[k] <= 0.0 {
                 continue;
             }
-            let c = Contact { i, other: o, delta, k: self.stiffness(i, o) };
-            let p = Self::force_of(&c, delta).0;
-            p_out[k] = p;
-            f[i] -= g.e * p;
+            let (p, Some(g)) = (p_out[k], &geo[k]) else { continue };
+            let (i, o) = other_of(k);
+            s.f[i] -= g.e * p;
             if let Other::Particle(j) = o {
-                f[j] += g.e * p;
+                s.f[j] += g.e * p;
             }
             sum += p;
             cnt += 1;
         }
-        (f, if cnt > 0 { sum / cnt as f64 } else { 0.0 })
+        if cnt > 0 {
+            sum / cnt as f64
+        } else {
+            0.0
+        }
     }
 
     /// Pre-relaxation of a packing that is not in equilibrium (e.g. a DEM snapshot in motion):
@@ -1235,6 +1333,7 @@ impl Nonlocal {
         let mut d = vec![0.0; lag.len()];
         let mut rel;
         let mut step = 0;
+        let mut scratch = FireScratch::default();
         let trace = std::env::var_os("MCDEM_NONLOCAL_TRACE").is_some();
         let (mut best, mut best_step, mut min_dt, mut longest) = (f64::INFINITY, 0usize, dt0, 0usize);
         self.last_fire_stalled = false;
@@ -1257,7 +1356,8 @@ impl Nonlocal {
                 p = vec![0.0; lag.len()];
                 d = vec![0.0; lag.len()];
             }
-            let (f, pmean) = self.fire_forces(&x, &candidates, &lag, margin, &mut p, &mut d);
+            let pmean = self.fire_forces(&mut scratch, &x, &candidates, &lag, margin, &mut p, &mut d);
+            let f = &scratch.f;
             std::mem::swap(&mut lag, &mut p);
             let fmax = f.iter().map(|f| f.norm()).fold(0.0, f64::max);
             rel = fmax / pmean.max(FORCE_FLOOR);
@@ -1297,7 +1397,7 @@ impl Nonlocal {
             let fnorm = f.iter().map(|f| f.norm_squared()).sum::<f64>().sqrt();
             let vnorm = v.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
             if power > 0.0 {
-                for (vi, fi) in v.iter_mut().zip(&f) {
+                for (vi, fi) in v.iter_mut().zip(f) {
                     *vi = *vi * (1.0 - alpha) + fi * (alpha * vnorm / fnorm.max(1e-300));
                 }
                 since_neg += 1;
@@ -1560,5 +1660,68 @@ mod tests {
             // side-wall force builds up.
             assert!(a.1 > a.3 && a.2 > 0.0, "dr {}: P_v {} Hertz {} P_h {}", a.0, a.1, a.3, a.2);
         }
+    }
+
+    /// FIRE's parallel force evaluation gives the serial pass's bits: a 6 × 6 × 6 packing (216
+    /// particles, more than one block of kernel sums and of contacts) pressed in a box of walls,
+    /// relaxed with the lagged nonlocal law on one and on two threads.
+    #[test]
+    fn fire_relaxation_does_not_depend_on_the_thread_count() {
+        let m = Material::hertz(1e4, 0.5).unwrap();
+        let wm = Material::hertz(1e7, 0.3).unwrap();
+        let packing = || {
+            let mut spheres = Vec::new();
+            for k in 0..216usize {
+                let (a, b, c) = ((k % 6) as f64, ((k / 6) % 6) as f64, (k / 36) as f64);
+                // Spacing below the diameter, and an irregular offset so no contact is symmetric.
+                let wobble = 0.04 * ((k * 7919) % 13) as f64 / 13.0;
+                spheres.push(Sphere {
+                    id: k as u64 + 1,
+                    x: Vec3::new(
+                        1.0 + 1.9 * a + wobble,
+                        1.0 + 1.9 * b - wobble,
+                        1.0 + 1.9 * c + 0.5 * wobble,
+                    ),
+                    radius: 1.0 + 0.02 * ((k * 31) % 5) as f64,
+                    material: m,
+                });
+            }
+            spheres
+        };
+        let relaxed = |threads: usize| {
+            let spheres = packing();
+            let walls = vec![
+                Wall { name: "x0".into(), point: Vec3::new(0.05, 0.0, 0.0), normal: Vec3::x() },
+                Wall { name: "x1".into(), point: Vec3::new(11.3, 0.0, 0.0), normal: -Vec3::x() },
+                Wall { name: "y0".into(), point: Vec3::new(0.0, 0.05, 0.0), normal: Vec3::y() },
+                Wall { name: "y1".into(), point: Vec3::new(0.0, 11.3, 0.0), normal: -Vec3::y() },
+                Wall { name: "z0".into(), point: Vec3::new(0.0, 0.0, 0.05), normal: Vec3::z() },
+                Wall { name: "z1".into(), point: Vec3::new(0.0, 0.0, 11.3), normal: -Vec3::z() },
+            ];
+            let mut s = Nonlocal::new(
+                &spheres,
+                &walls,
+                wm,
+                Kernel::new(KernelKind::Sphere, 1.0).unwrap(),
+                Settings::default(),
+            )
+            .unwrap();
+            s.update_active_set();
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (steps, rel) = pool.install(|| s.relax(400, 1e-12, true));
+            (s.positions(), steps, rel, s.contacts.len())
+        };
+        let (x1, steps1, rel1, c1) = relaxed(1);
+        let (x2, steps2, rel2, c2) = relaxed(2);
+        assert!(c1 > 216, "the packing must be loaded: {c1} contacts");
+        assert_eq!((steps1, rel1.to_bits(), c1), (steps2, rel2.to_bits(), c2));
+        for (a, b) in x1.iter().zip(&x2) {
+            for k in 0..3 {
+                assert_eq!(a[k].to_bits(), b[k].to_bits());
+            }
+        }
+        // The relaxation moved the particles (a run that did nothing would compare equal trivially).
+        let moved = x1.iter().zip(packing()).map(|(a, b)| (a - b.x).norm()).fold(0.0, f64::max);
+        assert!(moved > 1e-6, "largest move {moved}");
     }
 }
