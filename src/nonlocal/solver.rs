@@ -59,8 +59,10 @@ const FIRE_STALL_STEPS: usize = 2000;
 const FIRE_MIN_LEN: usize = 512;
 const FIRE_BLOCK: usize = 64;
 
-/// The buffers of [`Nonlocal::fire_forces`], kept across the steps of one relaxation so that a
-/// step allocates nothing.
+/// The buffers of [`Nonlocal::fire_forces`] that grow with the packing, kept across the steps of
+/// one relaxation instead of allocated every step. What a step still allocates is small: the list
+/// of particle blocks (one entry per [`FIRE_BLOCK`] particles) and one kernel-value buffer per
+/// parallel work item.
 #[derive(Default)]
 struct FireScratch {
     /// Per candidate: its geometry, if its gap may close.
