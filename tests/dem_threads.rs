@@ -57,15 +57,21 @@ fn two_threads_give_the_serial_result_bit_for_bit() {
 }
 
 /// Both threaded pair passes give the serial state bit for bit, and each runs where it should: a
-/// large packing (19 652 spheres: few pair ends shared between the two blocks) takes the blocks
-/// that own their particles, a small one (2 048) keeps every pair's result. Positions, velocities,
+/// spatially sorted packing (19 652 or 2 048 spheres: few pair ends shared between the two blocks)
+/// takes the blocks that own their particles; the same 2 048 spheres numbered in random order and
+/// never sorted (about half of the ends shared) keep every pair's result. Positions, velocities,
 /// angular velocities and the recorded pair forces after ten steps, Hertz and advanced MC.
 #[test]
 fn both_threaded_pair_passes_give_the_serial_state() {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    for (k, advanced, owned) in [(17, false, true), (17, true, true), (8, false, false)] {
+    let cases =
+        [(17, false, false, true), (17, true, false, true), (8, false, false, true), (8, false, true, false)];
+    for (k, advanced, scrambled, owned) in cases {
         let run = |threads: PairThreads| {
             let mut w = mcdem::bench::packing::scene(k, advanced).unwrap();
+            if scrambled {
+                scramble(&mut w);
+            }
             w.pair_threads = threads;
             pool.install(|| {
                 w.setup().unwrap();
@@ -79,9 +85,31 @@ fn both_threaded_pair_passes_give_the_serial_state() {
         let ((serial, none), (parallel, passes)) = (run(PairThreads::Serial), run(PairThreads::Parallel));
         assert_eq!(none, (0, 0));
         let expected = if owned { (10, 0) } else { (0, 10) };
-        assert_eq!(passes, expected, "k {k}, advanced {advanced}: (owned-block, kept) passes");
-        assert!(serial == parallel, "k {k}, advanced {advanced}: two threads changed the state");
+        let what = format!("k {k}, advanced {advanced}, scrambled {scrambled}");
+        assert_eq!(passes, expected, "{what}: (owned-block, kept) passes");
+        assert!(serial == parallel, "{what}: two threads changed the state");
     }
+}
+
+/// Renumbers the particles in a random order (same positions, sizes and velocities) and turns
+/// spatial sorting off, so that a particle's partners are spread over the whole pair list.
+fn scramble(w: &mut mcdem::engine::World) {
+    let n = w.p.len();
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut s: u64 = 0x2545f4914f6cdd1d;
+    for i in (1..n).rev() {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        order.swap(i, (s >> 33) as usize % (i + 1));
+    }
+    let old = std::mem::take(&mut w.p);
+    for &i in &order {
+        // 0.5 × (2r) is r exactly: the same radii and masses.
+        w.p.push(old.id[i], old.typ[i], old.x[i], 2.0 * old.radius[i], old.density[i]);
+        let m = w.p.len() - 1;
+        w.p.v[m] = old.v[i];
+        w.p.omega[m] = old.omega[i];
+    }
+    w.sort_every = 0;
 }
 
 /// The recorded pair forces behind the stress and coordination outputs are the same whichever

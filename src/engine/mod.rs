@@ -14,6 +14,8 @@ pub mod neighbor;
 
 use std::cell::RefCell;
 use std::fmt;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use crate::physics::contact_set::{
     loaded_threshold, radius_changes, ContactLoad, InfluenceCache, KeptInfluence, McParams,
@@ -457,6 +459,8 @@ pub struct World {
     tune_par_ns: u64,
     /// How the pair loop uses the thread pool (default: decided by the timing probe).
     pub pair_threads: PairThreads,
+    /// Set when this step's first threaded pass starts: ends the warm-up job ([`World::warm_up_pool`]).
+    pool_go: Arc<AtomicBool>,
 }
 
 /// Whether the pair loop runs on the thread pool. The results are bit-identical either way (the
@@ -558,20 +562,6 @@ impl World {
     pub fn step(&mut self) -> Result<(), StepError> {
         self.step += 1;
         let dt = self.dt;
-        if self.integrate {
-            self.initial_integrate();
-        }
-        if let Some(d) = self.domain.as_mut() {
-            d.advance_shear(dt);
-            self.le_travel += d.le_vjump * dt;
-        }
-        for m in &mut self.meshes {
-            if m.velocity != Vec3::zeros() {
-                let d = m.velocity * dt;
-                m.translate(&d);
-            }
-        }
-        self.neighbor_check()?;
         // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window with
         // and without them and keep the faster (results are bit-identical either way). The two
         // alternate in slices, so that a passing disturbance (another process, the pool's first
@@ -588,7 +578,27 @@ impl World {
             self.parallel = (phase / TUNE_SLICE) % 2 == 1;
         }
         let t0 = probe.then(std::time::Instant::now);
+        if self.parallel {
+            self.warm_up_pool();
+        }
+        if self.integrate {
+            self.initial_integrate();
+        }
+        if let Some(d) = self.domain.as_mut() {
+            d.advance_shear(dt);
+            self.le_travel += d.le_vjump * dt;
+        }
+        for m in &mut self.meshes {
+            if m.velocity != Vec3::zeros() {
+                let d = m.velocity * dt;
+                m.translate(&d);
+            }
+        }
+        self.neighbor_check()?;
         self.compute_forces(true)?;
+        if self.integrate {
+            self.final_integrate()?;
+        }
         if let Some(t0) = t0 {
             let ns = t0.elapsed().as_nanos() as u64;
             if self.parallel {
@@ -602,10 +612,36 @@ impl World {
                 self.tune_ser_ns = 0;
             }
         }
-        if self.integrate {
-            self.final_integrate()?;
-        }
         Ok(())
+    }
+
+    /// Keeps a pool worker awake until this step's first threaded pass starts. Between two
+    /// steps' threaded passes lies the serial part of a step (integration, neighbour check, walls,
+    /// tens of microseconds on a small packing), long enough for an idle rayon worker to go to
+    /// sleep; the threaded pass then waits for it to be woken, which cost as much as it saved on
+    /// the 514-particle hydrogel deck. Spawned at the start of the step, this job wakes the
+    /// worker while the serial part runs and spins until the pass begins (or 0.5 ms, beyond which
+    /// a step is long enough to pay for a wake-up), so the pass finds it awake.
+    fn warm_up_pool(&self) {
+        if rayon::current_num_threads() < 2 || self.pairs.len() < 2 * MIN_BLOCK_PAIRS {
+            return;
+        }
+        self.pool_go.store(false, Ordering::Relaxed);
+        let go = Arc::clone(&self.pool_go);
+        rayon::spawn(move || {
+            let t = std::time::Instant::now();
+            'spin: loop {
+                for _ in 0..64 {
+                    if go.load(Ordering::Acquire) {
+                        break 'spin;
+                    }
+                    std::hint::spin_loop();
+                }
+                if t.elapsed() > WARM_UP {
+                    break;
+                }
+            }
+        });
     }
 
     fn initial_integrate(&mut self) {
@@ -794,12 +830,14 @@ impl World {
                 }
             }
         }
-        // Deferred ends cost a serial pass after the blocks: worth it while they are few. With
-        // the particles sorted, a particle's partners j > i lie up to about two layers of bins
-        // ahead in index order, so the shared share of ends falls as the blocks thicken: in the
-        // dense packing with two blocks 9 % at 2 048 spheres (there keeping every pair's result
-        // is faster), 4 % at 19 652, 2.3 % at 97 556.
-        self.owned_blocks_pay = shared * 20 <= 2 * np;
+        // Deferred ends cost a serial pass after the blocks, one addition each; keeping every
+        // pair's result instead costs two more passes over all pairs and a second threaded
+        // section. With the particles sorted, a particle's partners j > i lie up to about two
+        // layers of bins ahead in index order, so few ends are shared: with two blocks 2.3 % at
+        // 97 556 spheres in the dense packing, 4 % at 19 652, 9 % at 2 048, 12 % in the
+        // 514-particle hydrogel deck (there the blocks take 2.1-2.3 s per stroke against
+        // 3.2-3.3 s keeping every result, serial 2.8 s). Unsorted numberings share about half.
+        self.owned_blocks_pay = shared * 4 <= 2 * np;
         self.deferred.resize_with(blocks, Vec::new);
         self.owner_key = Some((np, blocks, n));
     }
@@ -1084,6 +1122,10 @@ impl World {
             step: self.step,
         };
         let parallel = self.parallel && n >= 2 * MC_GRAIN && rayon::current_num_threads() > 1;
+        if parallel {
+            // The warm-up job holds the worker this pass is for.
+            self.pool_go.store(true, Ordering::Release);
+        }
         let (tolerance, kept) = match self.mc_cache.as_mut() {
             Some(c) => {
                 let (t, k) = c.slots_mut(n);
@@ -1136,6 +1178,7 @@ impl World {
         let threads = rayon::current_num_threads();
         let blocks = threads.min(self.pairs.len() / MIN_BLOCK_PAIRS).min(MAX_PAIR_BLOCKS);
         let threaded = self.parallel && threads > 1 && blocks > 1;
+        self.pool_go.store(true, Ordering::Release);
         if threaded && self.owner_key != Some((self.pairs.len(), blocks, n)) {
             self.assign_owners(blocks);
         }
@@ -1517,6 +1560,8 @@ const RECEIVER_GAP: f64 = 0.1;
 /// Steps between two serial-vs-threads timing probes, the steps each probe times in each mode,
 /// and the slices in which the modes alternate.
 const TUNE_PERIOD: u64 = 5000;
+/// Longest a warm-up job keeps a pool worker spinning ([`World::warm_up_pool`]).
+const WARM_UP: std::time::Duration = std::time::Duration::from_micros(500);
 const TUNE_WINDOW: u64 = 50;
 const TUNE_SLICE: u64 = 10;
 
