@@ -452,6 +452,8 @@ pub struct World {
     /// for the stress and coordination outputs.
     pair_force: Vec<Vec3>,
     pair_mc: Vec<bool>,
+    /// Per wall contact: its force on the particle at the last force pass (for the mesh sums).
+    wall_force: Vec<Vec3>,
     f_buf: Vec<Vec3>,
     t_buf: Vec<Vec3>,
     parallel: bool,
@@ -615,7 +617,8 @@ impl World {
         Ok(())
     }
 
-    /// Keeps a pool worker awake until this step's first threaded pass starts. Between two
+    /// Keeps a pool worker awake until this step's first threaded pass starts (each threaded
+    /// pass of a step sets `pool_go` as it starts, the first one ends the job). Between two
     /// steps' threaded passes lies the serial part of a step (integration, neighbour check, walls,
     /// tens of microseconds on a small packing), long enough for an idle rayon worker to go to
     /// sleep; the threaded pass then waits for it to be woken, which cost as much as it saved on
@@ -1338,49 +1341,53 @@ impl World {
                 self.p.f[i] += self.p.mass[i] * g;
             }
         }
-        for c in self.wc.iter_mut() {
-            let i = c.p as usize;
-            let wall_type = match &self.walls[c.wall as usize].geom {
-                WallGeom::Plane(pl) => pl.wall_type,
-                WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
-            };
-            let bi = Body {
-                x: self.p.x[i],
-                v: self.p.v[i],
-                omega: self.p.omega[i],
-                radius: self.p.radius[i],
-                mass: self.p.mass[i],
-            };
-            let wp = WallPoint { point: c.point, velocity: c.velocity };
-            let coeff = &self.coeffs[self.p.typ[i] * nt + wall_type];
-            let mut shear = c.shear;
-            let r = particle_wall(coeff, &bi, &wp, c.dr, dt, &mut shear)
-                .map_err(|e| contact_error(self.step, self.p.id[i], None, e))?;
-            let fnorm = match r {
-                Some(cf) => {
-                    self.p.f[i] += cf.force_i;
-                    self.p.torque[i] += cf.torque_i;
-                    if let WallGeom::Meshes(_) = self.walls[c.wall as usize].geom {
-                        self.meshes[c.mesh as usize].force -= cf.force_i;
-                    }
-                    cf.force_i.dot(&cf.en).abs()
-                }
-                None => 0.0,
-            };
-            if update {
-                c.shear = shear;
-                c.fn_prev = fnorm;
-                let rel = c.point - self.p.x[i];
-                c.rel_prev = if fnorm > 0.0 {
-                    rel
-                } else {
-                    let l = rel.norm();
-                    if l > 0.0 {
-                        rel * ((self.p.radius[i] + c.dr) / l)
-                    } else {
-                        Vec3::zeros()
-                    }
-                };
+        // Walls, in wall-contact order, which is particle order. With threads the list splits at
+        // a particle boundary and each half adds into its own particles' sums: every particle
+        // gets its terms in the serial order. A mesh's total force is summed afterwards, in
+        // contact order, from each contact's force.
+        let ctx = WallCtx {
+            walls: &self.walls,
+            meshes: &self.meshes,
+            coeffs: &self.coeffs,
+            nt,
+            typ: &self.p.typ,
+            x: &self.p.x,
+            v: &self.p.v,
+            omega: &self.p.omega,
+            radius: &self.p.radius,
+            mass: &self.p.mass,
+            id: &self.p.id,
+            dt,
+            update,
+            step: self.step,
+        };
+        if self.wall_force.len() != self.wc.len() {
+            self.wall_force.resize(self.wc.len(), Vec3::zeros());
+        }
+        let (f, torque) = (&mut self.p.f[..], &mut self.p.torque[..]);
+        let split = if self.parallel && self.wc.len() >= MIN_THREADED_WALL_CONTACTS && threads > 1 {
+            let mut mid = self.wc.len() / 2;
+            let ip = self.wc[mid].p;
+            while mid > 0 && self.wc[mid - 1].p == ip {
+                mid -= 1;
+            }
+            (mid > 0).then_some((mid, ip as usize))
+        } else {
+            None
+        };
+        match split {
+            Some((mid, ip)) => {
+                let (wa, wb) = self.wc.split_at_mut(mid);
+                let (fa, fb) = self.wall_force.split_at_mut(mid);
+                let ((f0, f1), (t0, t1)) = (f.split_at_mut(ip), torque.split_at_mut(ip));
+                let (a, b) = rayon::join(|| ctx.forces(wa, fa, f0, t0, 0), || ctx.forces(wb, fb, f1, t1, ip));
+                a.and(b)?;
+            }
+            None => ctx.forces(&mut self.wc, &mut self.wall_force, f, torque, 0)?,
+        }
+        for (c, wf) in self.wc.iter().zip(&self.wall_force) {
+            if let WallGeom::Meshes(_) = self.walls[c.wall as usize].geom {
+                self.meshes[c.mesh as usize].force -= *wf;
             }
         }
         Ok(())
@@ -1574,6 +1581,8 @@ const PARALLEL_CHUNK: usize = 256;
 /// Fewest pairs in a block of the threaded pair pass, and most blocks (block indices are kept
 /// in a `u16` per particle).
 const MIN_BLOCK_PAIRS: usize = 512;
+/// Fewest wall contacts worth a threaded wall pass.
+const MIN_THREADED_WALL_CONTACTS: usize = 64;
 const MAX_PAIR_BLOCKS: usize = 64;
 
 /// Pairs per block when `np` pairs are split into `blocks` runs (the last may be shorter).
@@ -1901,6 +1910,86 @@ struct McCounts {
     contacts: u64,
     fallbacks: u64,
     recomputed: u64,
+}
+
+/// Read-only view of what the wall-contact forces need (shared between threads).
+struct WallCtx<'a> {
+    walls: &'a [WallFix],
+    meshes: &'a [Mesh],
+    coeffs: &'a [PairCoeffs],
+    nt: usize,
+    typ: &'a [usize],
+    x: &'a [Vec3],
+    v: &'a [Vec3],
+    omega: &'a [Vec3],
+    radius: &'a [f64],
+    mass: &'a [f64],
+    id: &'a [i64],
+    dt: f64,
+    update: bool,
+    step: u64,
+}
+
+impl WallCtx<'_> {
+    /// Forces of the wall contacts `wc`, whose particles are `base..base + f.len()`, added into
+    /// those particles' sums `f`, `torque` in contact order; each contact's force on the particle
+    /// into `force` (for the mesh sums), and, on a time step, its history updated.
+    fn forces(
+        &self,
+        wc: &mut [WallContact],
+        force: &mut [Vec3],
+        f: &mut [Vec3],
+        torque: &mut [Vec3],
+        base: usize,
+    ) -> Result<(), StepError> {
+        for (c, fc) in wc.iter_mut().zip(force) {
+            let i = c.p as usize;
+            let wall_type = match &self.walls[c.wall as usize].geom {
+                WallGeom::Plane(pl) => pl.wall_type,
+                WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
+            };
+            let bi = Body {
+                x: self.x[i],
+                v: self.v[i],
+                omega: self.omega[i],
+                radius: self.radius[i],
+                mass: self.mass[i],
+            };
+            let wp = WallPoint { point: c.point, velocity: c.velocity };
+            let coeff = &self.coeffs[self.typ[i] * self.nt + wall_type];
+            let mut shear = c.shear;
+            let r = particle_wall(coeff, &bi, &wp, c.dr, self.dt, &mut shear)
+                .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
+            let fnorm = match r {
+                Some(cf) => {
+                    f[i - base] += cf.force_i;
+                    torque[i - base] += cf.torque_i;
+                    *fc = cf.force_i;
+                    cf.force_i.dot(&cf.en).abs()
+                }
+                None => {
+                    *fc = Vec3::zeros();
+                    0.0
+                }
+            };
+            if self.update {
+                c.shear = shear;
+                c.fn_prev = fnorm;
+                let rel = c.point - self.x[i];
+                c.rel_prev = if fnorm > 0.0 {
+                    rel
+                } else {
+                    let l = rel.norm();
+                    if l > 0.0 {
+                        rel * ((self.radius[i] + c.dr) / l)
+                    } else {
+                        Vec3::zeros()
+                    }
+                };
+            }
+        }
+        Ok(())
+    }
 }
 
 thread_local! {
