@@ -2,8 +2,7 @@
 # Speed of `mcdem run` next to stock LIGGGHTS on the hydrogel example (514 particles, Hertz,
 # 4 strokes × 30000 steps), VTK dumps off in both, run back to back in one invocation so both see
 # the same machine load. Prints particle-steps per second from each engine's "Loop time" lines,
-# mcdem with one and with two threads (the deck is too small for LIGGGHTS to gain from a second
-# MPI rank: 16.9 s on 2 ranks against 15.7 s on 1, benches/hydrogel_mpi.sh).
+# LIGGGHTS on one and (with mpirun) two MPI ranks, mcdem with one and with two threads.
 # Usage: benches/hydrogel_speed.sh [path/to/mcdem]
 set -euo pipefail
 MCDEM=${1:-$(dirname "$0")/../target/release/mcdem}
@@ -20,15 +19,24 @@ rate() { # sum steps and seconds over "Loop time of T on P procs for N steps wit
 }
 liggghts -in in.hydrogel_default -log log.liggghts > /dev/null 2>&1
 L=$(rate < log.liggghts)
+L2=
+if command -v mpirun > /dev/null; then
+  mpirun --allow-run-as-root -np 2 liggghts -in in.hydrogel_default -log log.liggghts2 > /dev/null 2>&1
+  L2=$(rate < log.liggghts2)
+fi
 RAYON_NUM_THREADS=1 "$MCDEM" run in.hydrogel_default -log log.mcdem1 --no-progress > /dev/null
 M1=$(rate < log.mcdem1)
 RAYON_NUM_THREADS=2 "$MCDEM" run in.hydrogel_default -log log.mcdem2 --no-progress > /dev/null
 M2=$(rate < log.mcdem2)
 echo "LIGGGHTS (1 rank):   $L"
+[ -n "$L2" ] && echo "LIGGGHTS (2 ranks):  $L2"
 echo "mcdem (1 thread):    $M1"
 echo "mcdem (2 threads):   $M2"
-python3 - "$L" "$M1" "$M2" <<'PY'
+python3 - "$L" "$M1" "$M2" "$L2" <<'PY'
 import sys
-r = [float(a.split(",")[1].split()[0]) for a in sys.argv[1:]]
-print(f"ratio mcdem/LIGGGHTS: 1 thread {r[1]/r[0]:.2f}, 2 threads {r[2]/r[0]:.2f}")
+r = [float(a.split(",")[1].split()[0]) for a in sys.argv[1:4]]
+print(f"ratio mcdem/LIGGGHTS 1 rank: 1 thread {r[1]/r[0]:.2f}, 2 threads {r[2]/r[0]:.2f}")
+if sys.argv[4]:
+    l2 = float(sys.argv[4].split(",")[1].split()[0])
+    print(f"ratio mcdem 2 threads / LIGGGHTS 2 ranks: {r[2]/l2:.2f}; LIGGGHTS 2 ranks / 1 rank: {l2/r[0]:.2f}")
 PY
