@@ -564,10 +564,12 @@ impl World {
     pub fn step(&mut self) -> Result<(), StepError> {
         self.step += 1;
         let dt = self.dt;
-        // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window with
-        // and without them and keep the faster (results are bit-identical either way). The two
-        // alternate in slices, so that a passing disturbance (another process, the pool's first
-        // wake-up, buffers allocated at their first use) is shared rather than blamed on one.
+        // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window of
+        // whole steps with and without them and keep the faster (results are bit-identical
+        // either way; whole steps, so that what threading costs outside the threaded passes, the
+        // warm-up job's core among it, counts too). The two alternate in slices, so that a
+        // passing disturbance (another process, the pool's first wake-up, buffers allocated at
+        // their first use) is shared rather than blamed on one.
         let phase = self.step % TUNE_PERIOD;
         let probe = match self.pair_threads {
             PairThreads::Auto => phase < 2 * TUNE_WINDOW,
