@@ -459,14 +459,19 @@ pub struct World {
     parallel: bool,
     tune_ser_ns: u64,
     tune_par_ns: u64,
-    /// How the pair loop uses the thread pool (default: decided by the timing probe).
+    /// Whether a step's force passes (pairs, walls, multi-contact kernel) use the thread pool
+    /// (default: decided by the timing probe).
     pub pair_threads: PairThreads,
-    /// Set when this step's first threaded pass starts: ends the warm-up job ([`World::warm_up_pool`]).
+    /// Set when a step reaches its first threaded pass (by the pair pass in any case): ends the
+    /// warm-up job ([`World::warm_up_pool`]).
     pool_go: Arc<AtomicBool>,
+    /// A warm-up job was spawned and has not started yet: no second one is queued behind it.
+    warm_up_queued: Arc<AtomicBool>,
 }
 
-/// Whether the pair loop runs on the thread pool. The results are bit-identical either way (the
-/// pair forces are summed in pair order), so this only decides speed.
+/// Whether the force passes of a step (pairs, wall contacts, the multi-contact kernel) run on the
+/// thread pool. The results are bit-identical either way (every sum is taken in the serial order),
+/// so this only decides speed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum PairThreads {
     /// Every `TUNE_PERIOD` steps, time windows with and without threads (alternating in slices)
@@ -565,9 +570,10 @@ impl World {
         self.step += 1;
         let dt = self.dt;
         // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window of
-        // whole steps with and without them and keep the faster (results are bit-identical
-        // either way; whole steps, so that what threading costs outside the threaded passes, the
-        // warm-up job's core among it, counts too). The two alternate in slices, so that a
+        // steps with and without them and keep the faster (results are bit-identical either
+        // way). Whole steps, so that what threading changes outside the threaded passes counts
+        // too, but without the neighbour check: a list build costs the same in both modes and
+        // would weigh on whichever slice it falls in. The two alternate in slices, so that a
         // passing disturbance (another process, the pool's first wake-up, buffers allocated at
         // their first use) is shared rather than blamed on one.
         let phase = self.step % TUNE_PERIOD;
@@ -598,13 +604,15 @@ impl World {
                 m.translate(&d);
             }
         }
+        let t_check = probe.then(std::time::Instant::now);
         self.neighbor_check()?;
+        let check = t_check.map_or(std::time::Duration::ZERO, |t| t.elapsed());
         self.compute_forces(true)?;
         if self.integrate {
             self.final_integrate()?;
         }
         if let Some(t0) = t0 {
-            let ns = t0.elapsed().as_nanos() as u64;
+            let ns = t0.elapsed().saturating_sub(check).as_nanos() as u64;
             if self.parallel {
                 self.tune_par_ns += ns;
             } else {
@@ -619,21 +627,31 @@ impl World {
         Ok(())
     }
 
-    /// Keeps a pool worker awake until this step's first threaded pass starts (each threaded
-    /// pass of a step sets `pool_go` as it starts, the first one ends the job). Between two
-    /// steps' threaded passes lies the serial part of a step (integration, neighbour check, walls,
-    /// tens of microseconds on a small packing), long enough for an idle rayon worker to go to
-    /// sleep; the threaded pass then waits for it to be woken, which cost as much as it saved on
-    /// the 514-particle hydrogel deck. Spawned at the start of the step, this job wakes the
-    /// worker while the serial part runs and spins until the pass begins (or 0.5 ms, beyond which
-    /// a step is long enough to pay for a wake-up), so the pass finds it awake.
+    /// Keeps a pool worker awake until this step's first threaded pass starts. Between two
+    /// steps' threaded passes lies the serial part of a step (integration, neighbour check, wall
+    /// scan: tens of microseconds on a small packing), long enough for an idle rayon worker to go
+    /// to sleep; the threaded pass then waited for it to be woken, which cost as much as it saved
+    /// on the 514-particle hydrogel deck. Spawned at the start of the step, this job wakes the
+    /// worker while the serial part runs and spins until `pool_go` is set (the first threaded
+    /// pass sets it, and the pair pass in any case) or 0.5 ms have passed (a step that long pays
+    /// for a wake-up), so the pass finds the worker awake.
+    ///
+    /// Only when the stepping thread is itself a pool worker (`mcdem run` steps inside the pool):
+    /// from outside, a threaded pass hands all of its work to the pool and both workers must be
+    /// awake, which one warm-up job does not achieve. A job that no worker has taken yet (all busy
+    /// with other work) is not joined by another one. Each spawn allocates the small job record.
     fn warm_up_pool(&self) {
-        if rayon::current_num_threads() < 2 || self.pairs.len() < 2 * MIN_BLOCK_PAIRS {
+        if rayon::current_thread_index().is_none()
+            || rayon::current_num_threads() < 2
+            || self.pairs.len() < 2 * MIN_BLOCK_PAIRS
+            || self.warm_up_queued.swap(true, Ordering::AcqRel)
+        {
             return;
         }
         self.pool_go.store(false, Ordering::Relaxed);
-        let go = Arc::clone(&self.pool_go);
+        let (go, queued) = (Arc::clone(&self.pool_go), Arc::clone(&self.warm_up_queued));
         rayon::spawn(move || {
+            queued.store(false, Ordering::Release);
             let t = std::time::Instant::now();
             'spin: loop {
                 for _ in 0..64 {
@@ -824,8 +842,10 @@ impl World {
         let (n, np) = (self.p.len(), self.pairs.len());
         self.owner.clear();
         self.owner.resize(n, u16::MAX);
+        self.deferred.resize_with(blocks, Vec::new);
         let mut shared = 0;
         for (b, block) in self.pairs.chunks(block_len(np, blocks)).enumerate() {
+            let before = shared;
             for pr in block {
                 for a in [pr.i as usize, pr.j as usize] {
                     if self.owner[a] == u16::MAX {
@@ -834,6 +854,10 @@ impl World {
                     shared += usize::from(self.owner[a] != b as u16);
                 }
             }
+            // Room for every deferral the block can make, so the pair loop never grows the list.
+            let d = &mut self.deferred[b];
+            d.clear();
+            d.reserve(shared - before);
         }
         // Deferred ends cost a serial pass after the blocks, one addition each; keeping every
         // pair's result instead costs two more passes over all pairs and a second threaded
@@ -843,7 +867,6 @@ impl World {
         // 514-particle hydrogel deck (there the blocks take 2.1-2.3 s per stroke against
         // 3.2-3.3 s keeping every result, serial 2.8 s). Unsorted numberings share about half.
         self.owned_blocks_pay = shared * 4 <= 2 * np;
-        self.deferred.resize_with(blocks, Vec::new);
         self.owner_key = Some((np, blocks, n));
     }
 
@@ -1183,6 +1206,7 @@ impl World {
         let threads = rayon::current_num_threads();
         let blocks = threads.min(self.pairs.len() / MIN_BLOCK_PAIRS).min(MAX_PAIR_BLOCKS);
         let threaded = self.parallel && threads > 1 && blocks > 1;
+        // Threaded or not, the warm-up job has served its purpose (or would spin in vain).
         self.pool_go.store(true, Ordering::Release);
         if threaded && self.owner_key != Some((self.pairs.len(), blocks, n)) {
             self.assign_owners(blocks);
@@ -1569,8 +1593,6 @@ const RECEIVER_GAP: f64 = 0.1;
 /// Steps between two serial-vs-threads timing probes, the steps each probe times in each mode,
 /// and the slices in which the modes alternate.
 const TUNE_PERIOD: u64 = 5000;
-/// Longest a warm-up job keeps a pool worker spinning ([`World::warm_up_pool`]).
-const WARM_UP: std::time::Duration = std::time::Duration::from_micros(500);
 const TUNE_WINDOW: u64 = 50;
 const TUNE_SLICE: u64 = 10;
 
@@ -1583,9 +1605,13 @@ const PARALLEL_CHUNK: usize = 256;
 /// Fewest pairs in a block of the threaded pair pass, and most blocks (block indices are kept
 /// in a `u16` per particle).
 const MIN_BLOCK_PAIRS: usize = 512;
+const MAX_PAIR_BLOCKS: usize = 64;
+
 /// Fewest wall contacts worth a threaded wall pass.
 const MIN_THREADED_WALL_CONTACTS: usize = 64;
-const MAX_PAIR_BLOCKS: usize = 64;
+
+/// Longest a warm-up job keeps a pool worker spinning ([`World::warm_up_pool`]).
+const WARM_UP: std::time::Duration = std::time::Duration::from_micros(500);
 
 /// Pairs per block when `np` pairs are split into `blocks` runs (the last may be shorter).
 fn block_len(np: usize, blocks: usize) -> usize {
