@@ -7,7 +7,7 @@ use mcdem::physics::contact_set::{influence, radius_changes, radius_changes_with
 use mcdem::physics::ghods2022::{Cap, MprTest};
 use mcdem::physics::hertz::Tangential;
 use mcdem::physics::material::{Material, PairCoeffs};
-use mcdem::physics::pair::{particle_particle, particle_wall, Body, PairLanes, WallPoint, LANES};
+use mcdem::physics::pair::{particle_particle, particle_wall, Body, PairLanes, WallLanes, WallPoint, LANES};
 use mcdem::physics::Vec3;
 use proptest::prelude::*;
 
@@ -235,6 +235,65 @@ proptest! {
                 }
                 Ok(None) => unreachable!("only overlapping pairs are batched"),
                 Err(_) => prop_assert!(!lanes.ok[l], "lane {} accepted a pair the pair force refuses", l),
+            }
+        }
+    }
+
+    #[test]
+    fn vectorised_wall_batch_is_the_wall_force_bit_for_bit(
+        contacts in prop::collection::vec((
+            (0.0..=0.5f64, 0.05..=1.0f64, prop_oneof![Just(0.0), 0.0..2.0f64]),
+            (direction(), 0.0..1.3f64, prop::array::uniform3(-1.0..1.0f64), prop::array::uniform3(-1.0..1.0f64)),
+            prop::array::uniform3(-100.0..100.0f64),
+            (prop::array::uniform3(-1e-4..1e-4f64), -1e-4..1e-4f64),
+        ), 1..=LANES),
+        dt in prop_oneof![Just(0.0), Just(1e-5)],
+    ) {
+        // Random particle–wall contacts that reach the wall (some beyond a radius, frictionless,
+        // undamped, on moving walls among them) in one batch: each lane must give exactly what
+        // `particle_wall` gives, and flag exactly the contacts it refuses.
+        let mut lanes = WallLanes::default();
+        let mut expected = Vec::new();
+        for ((nu, e, mu), (dir, gap, vi, vw), wi, (sh, dri)) in contacts {
+            let m = Material::hertz(23.3e3, nu).unwrap();
+            let w = Material::hertz(5e7, 0.5).unwrap();
+            let c = PairCoeffs::new(&m, &w, e, mu).unwrap();
+            let wall = WallPoint { point: Vec3::new(0.1, -0.2, 0.3), velocity: Vec3::from(vw) };
+            let b = Body { x: wall.point + dir * (R - gap * R), v: Vec3::from(vi), omega: Vec3::from(wi), radius: R, mass: 4e-6 };
+            let d = b.x - wall.point;
+            let ri = b.radius + dri;
+            if d.norm_squared() >= ri * ri {
+                continue;
+            }
+            let l = expected.len();
+            for a in 0..3 {
+                lanes.d[a][l] = d[a];
+                lanes.vr[a][l] = b.v[a] - wall.velocity[a];
+                lanes.omega[a][l] = b.omega[a];
+                lanes.shear[a][l] = sh[a];
+            }
+            (lanes.radius[l], lanes.dr[l], lanes.mass[l]) = (b.radius, dri, b.mass);
+            (lanes.e_star[l], lanes.g_star[l], lanes.beta[l]) = (c.e_star, c.g_star, c.beta);
+            (lanes.friction[l], lanes.damping_ratio_t_n[l]) = (c.friction, c.damping_ratio_t_n);
+            let mut shear = Vec3::from(sh);
+            let r = particle_wall(&c, &b, &wall, dri, dt, &mut shear);
+            expected.push((r, shear));
+        }
+        prop_assume!(!expected.is_empty());
+        lanes.pad_from_first(expected.len());
+        lanes.evaluate(dt);
+        for (l, (r, shear)) in expected.iter().enumerate() {
+            let lane = |a: &[[f64; LANES]; 3]| Vec3::new(a[0][l], a[1][l], a[2][l]);
+            match r {
+                Ok(Some(f)) => {
+                    prop_assert!(lanes.ok[l]);
+                    prop_assert_eq!(lane(&lanes.force), f.force_i);
+                    prop_assert_eq!(lane(&lanes.torque), f.torque_i);
+                    prop_assert_eq!(lane(&lanes.shear), *shear);
+                    prop_assert_eq!(lanes.fnorm[l], f.force_i.dot(&f.en).abs());
+                }
+                Ok(None) => unreachable!("only contacts that reach the wall are batched"),
+                Err(_) => prop_assert!(!lanes.ok[l], "lane {} accepted a contact the wall force refuses", l),
             }
         }
     }

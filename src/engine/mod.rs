@@ -22,7 +22,7 @@ use crate::physics::contact_set::{
 };
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::{
-    particle_particle, particle_wall, Body, ContactError, PairLanes, WallPoint, LANES,
+    particle_particle, particle_wall, Body, ContactError, PairLanes, WallLanes, WallPoint, LANES,
 };
 use crate::physics::{Material, PairCoeffs, Vec3};
 
@@ -1386,6 +1386,7 @@ impl World {
             dt,
             update,
             step: self.step,
+            batched,
         };
         if self.wall_force.len() != self.wc.len() {
             self.wall_force.resize(self.wc.len(), Vec3::zeros());
@@ -1956,6 +1957,8 @@ struct WallCtx<'a> {
     dt: f64,
     update: bool,
     step: u64,
+    /// Evaluate the contacts that reach their wall in vectorised batches ([`WallLanes`]).
+    batched: bool,
 }
 
 impl WallCtx<'_> {
@@ -1970,53 +1973,157 @@ impl WallCtx<'_> {
         torque: &mut [Vec3],
         base: usize,
     ) -> Result<(), StepError> {
+        if self.batched {
+            return self.forces_batched(wc, force, f, torque, base);
+        }
         for (c, fc) in wc.iter_mut().zip(force) {
             let i = c.p as usize;
-            let wall_type = match &self.walls[c.wall as usize].geom {
-                WallGeom::Plane(pl) => pl.wall_type,
-                WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
-            };
-            let bi = Body {
-                x: self.x[i],
-                v: self.v[i],
-                omega: self.omega[i],
-                radius: self.radius[i],
-                mass: self.mass[i],
-            };
-            let wp = WallPoint { point: c.point, velocity: c.velocity };
-            let coeff = &self.coeffs[self.typ[i] * self.nt + wall_type];
             let mut shear = c.shear;
-            let r = particle_wall(coeff, &bi, &wp, c.dr, self.dt, &mut shear)
-                .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
-            let fnorm = match r {
-                Some(cf) => {
-                    f[i - base] += cf.force_i;
-                    torque[i - base] += cf.torque_i;
-                    *fc = cf.force_i;
-                    cf.force_i.dot(&cf.en).abs()
-                }
-                None => {
-                    *fc = Vec3::zeros();
-                    0.0
-                }
-            };
-            if self.update {
-                c.shear = shear;
-                c.fn_prev = fnorm;
-                let rel = c.point - self.x[i];
-                c.rel_prev = if fnorm > 0.0 {
-                    rel
-                } else {
-                    let l = rel.norm();
-                    if l > 0.0 {
-                        rel * ((self.radius[i] + c.dr) / l)
-                    } else {
-                        Vec3::zeros()
-                    }
-                };
-            }
+            let r =
+                particle_wall(self.coeff(c), &self.body(i), &self.wall_point(c), c.dr, self.dt, &mut shear)
+                    .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
+            let out = r.map(|cf| (cf.force_i, cf.torque_i, cf.force_i.dot(&cf.en).abs()));
+            self.finish(c, fc, shear, out, f, torque, base);
         }
         Ok(())
+    }
+
+    /// [`WallCtx::forces`] with the contacts that reach their wall evaluated in batches of
+    /// [`LANES`] ([`WallLanes`], vectorised) and the results added in contact order afterwards:
+    /// the same sums. A contact that does not reach its wall adds nothing, so settling it at
+    /// once, ahead of the batch still open, changes no sum.
+    fn forces_batched(
+        &self,
+        wc: &mut [WallContact],
+        force: &mut [Vec3],
+        f: &mut [Vec3],
+        torque: &mut [Vec3],
+        base: usize,
+    ) -> Result<(), StepError> {
+        let mut lanes = WallLanes::default();
+        let mut slot = [0usize; LANES];
+        let mut n = 0;
+        for k in 0..wc.len() {
+            let c = &wc[k];
+            let i = c.p as usize;
+            let ri = self.radius[i] + c.dr;
+            let d = self.x[i] - c.point;
+            if d.norm_squared() >= ri * ri {
+                self.finish(&mut wc[k], &mut force[k], Vec3::zeros(), None, f, torque, base);
+                continue;
+            }
+            let cf = self.coeff(c);
+            let (l, v) = (n, self.v[i] - c.velocity);
+            for a in 0..3 {
+                lanes.d[a][l] = d[a];
+                lanes.vr[a][l] = v[a];
+                lanes.omega[a][l] = self.omega[i][a];
+                lanes.shear[a][l] = c.shear[a];
+            }
+            (lanes.radius[l], lanes.dr[l], lanes.mass[l]) = (self.radius[i], c.dr, self.mass[i]);
+            (lanes.e_star[l], lanes.g_star[l], lanes.beta[l]) = (cf.e_star, cf.g_star, cf.beta);
+            (lanes.friction[l], lanes.damping_ratio_t_n[l]) = (cf.friction, cf.damping_ratio_t_n);
+            slot[n] = k;
+            n += 1;
+            if n == LANES {
+                self.flush(&mut lanes, &slot, wc, force, f, torque, base)?;
+                n = 0;
+            }
+        }
+        if n > 0 {
+            lanes.pad_from_first(n);
+            self.flush(&mut lanes, &slot[..n], wc, force, f, torque, base)?;
+        }
+        Ok(())
+    }
+
+    /// Evaluates a batch and settles its contacts `slot` in order. A lane that cannot be
+    /// integrated is evaluated again by [`particle_wall`] for the error it reports.
+    #[allow(clippy::too_many_arguments)]
+    fn flush(
+        &self,
+        lanes: &mut WallLanes,
+        slot: &[usize],
+        wc: &mut [WallContact],
+        force: &mut [Vec3],
+        f: &mut [Vec3],
+        torque: &mut [Vec3],
+        base: usize,
+    ) -> Result<(), StepError> {
+        lanes.evaluate(self.dt);
+        for (l, &k) in slot.iter().enumerate() {
+            let c = &mut wc[k];
+            if !lanes.ok[l] {
+                let i = c.p as usize;
+                let mut shear = c.shear;
+                particle_wall(self.coeff(c), &self.body(i), &self.wall_point(c), c.dr, self.dt, &mut shear)
+                    .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
+            }
+            let lane = |a: &[[f64; LANES]; 3]| Vec3::new(a[0][l], a[1][l], a[2][l]);
+            let out = Some((lane(&lanes.force), lane(&lanes.torque), lanes.fnorm[l]));
+            self.finish(c, &mut force[k], lane(&lanes.shear), out, f, torque, base);
+        }
+        Ok(())
+    }
+
+    /// Settles one contact: its force and torque (if it touches) into the particle's sums, its
+    /// force recorded for the mesh sums, and on a time step its history.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn finish(
+        &self,
+        c: &mut WallContact,
+        fc: &mut Vec3,
+        shear: Vec3,
+        out: Option<(Vec3, Vec3, f64)>,
+        f: &mut [Vec3],
+        torque: &mut [Vec3],
+        base: usize,
+    ) {
+        let i = c.p as usize;
+        let fnorm = match out {
+            Some((force, tq, fnorm)) => {
+                f[i - base] += force;
+                torque[i - base] += tq;
+                *fc = force;
+                fnorm
+            }
+            None => {
+                *fc = Vec3::zeros();
+                0.0
+            }
+        };
+        if self.update {
+            c.shear = shear;
+            c.fn_prev = fnorm;
+            let rel = c.point - self.x[i];
+            c.rel_prev = if fnorm > 0.0 {
+                rel
+            } else {
+                let l = rel.norm();
+                if l > 0.0 {
+                    rel * ((self.radius[i] + c.dr) / l)
+                } else {
+                    Vec3::zeros()
+                }
+            };
+        }
+    }
+
+    fn coeff(&self, c: &WallContact) -> &PairCoeffs {
+        let wall_type = match &self.walls[c.wall as usize].geom {
+            WallGeom::Plane(pl) => pl.wall_type,
+            WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
+        };
+        &self.coeffs[self.typ[c.p as usize] * self.nt + wall_type]
+    }
+
+    fn body(&self, i: usize) -> Body {
+        Body { x: self.x[i], v: self.v[i], omega: self.omega[i], radius: self.radius[i], mass: self.mass[i] }
+    }
+
+    fn wall_point(&self, c: &WallContact) -> WallPoint {
+        WallPoint { point: c.point, velocity: c.velocity }
     }
 }
 

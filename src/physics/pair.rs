@@ -209,6 +209,27 @@ pub fn particle_particle(
     Ok(Some(cf))
 }
 
+/// Geometry of a particle–wall contact whose modified sphere (radius `ri`) reaches the wall, from
+/// d = centre − closest wall point and r = |d| > 0: the one place it is built (scalar and batched).
+#[inline(always)]
+fn wall_geometry(d: Vec3, r: f64, ri: f64, point: Vec3, vr: Vec3, omega: Vec3, mass: f64) -> Geometry {
+    let overlap = ri - r;
+    let cri = ri - 0.5 * overlap;
+    Geometry {
+        en: d * (1.0 / r),
+        overlap,
+        point,
+        vr,
+        w: cri * omega,
+        cri,
+        crj: 0.0,
+        // The wall is the limit of an infinite, infinitely heavy partner (see
+        // `hertz::effective_radius_and_mass`).
+        reff: ri,
+        meff: mass,
+    }
+}
+
 /// Why an overlapping pair (centre difference `d`, modified radii summing to `radsum`, smaller
 /// original radius `rmin`) cannot be integrated, if it cannot.
 #[inline(always)]
@@ -399,24 +420,121 @@ pub fn particle_wall(
     if overlap >= bi.radius {
         return Err(ContactError::OverlapBeyondRadius { overlap, radius: bi.radius });
     }
-    let cri = ri - 0.5 * overlap;
-    let g = Geometry {
-        en: d * (1.0 / r),
-        overlap,
-        point: wall.point,
-        vr: bi.v - wall.velocity,
-        w: cri * bi.omega,
-        cri,
-        crj: 0.0,
-        // The wall is the limit of an infinite, infinitely heavy partner (see
-        // `hertz::effective_radius_and_mass`).
-        reff: ri,
-        meff: bi.mass,
-    };
+    let g = wall_geometry(d, r, ri, wall.point, bi.v - wall.velocity, bi.omega, bi.mass);
     let cf = forces(c, &g, dt, shear);
     if finite(&cf) {
         Ok(Some(cf))
     } else {
         Err(ContactError::NonFinite)
+    }
+}
+
+/// A batch of particle–wall contacts whose modified spheres reach the wall, in structure-of-arrays
+/// form, one contact per lane: the same formulas as [`particle_wall`] (bit-identical results, as
+/// for [`PairLanes`]), tangential model `history`.
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(64))]
+pub struct WallLanes {
+    /// Particle centre − closest wall point [m].
+    pub d: [[f64; LANES]; 3],
+    /// Particle velocity − wall velocity at that point [m/s].
+    pub vr: [[f64; LANES]; 3],
+    pub omega: [[f64; LANES]; 3],
+    /// Original radius and multi-contact radius change [m], mass [kg].
+    pub radius: [f64; LANES],
+    pub dr: [f64; LANES],
+    pub mass: [f64; LANES],
+    /// The particle–wall coefficients, lane by lane.
+    pub e_star: [f64; LANES],
+    pub g_star: [f64; LANES],
+    pub beta: [f64; LANES],
+    pub friction: [f64; LANES],
+    pub damping_ratio_t_n: [f64; LANES],
+    /// Tangential history ξ, updated in place [m].
+    pub shear: [[f64; LANES]; 3],
+    /// Outputs: force [N] and torque [N m] on the particle, |F·n| [N], and whether the contact
+    /// can be integrated (false: the caller asks [`particle_wall`] why not).
+    pub force: [[f64; LANES]; 3],
+    pub torque: [[f64; LANES]; 3],
+    pub fnorm: [f64; LANES],
+    pub ok: [bool; LANES],
+}
+
+impl WallLanes {
+    /// Fills lanes `used..` with copies of lane 0 (a batch is always evaluated whole).
+    pub fn pad_from_first(&mut self, used: usize) {
+        fn pad<const N: usize>(a: &mut [f64; N], used: usize) {
+            let first = a[0];
+            a[used..].fill(first);
+        }
+        for a in 0..3 {
+            for v in [&mut self.d, &mut self.vr, &mut self.omega, &mut self.shear] {
+                pad(&mut v[a], used);
+            }
+        }
+        for v in [
+            &mut self.radius,
+            &mut self.dr,
+            &mut self.mass,
+            &mut self.e_star,
+            &mut self.g_star,
+            &mut self.beta,
+            &mut self.friction,
+            &mut self.damping_ratio_t_n,
+        ] {
+            pad(v, used);
+        }
+    }
+
+    /// Evaluates every lane (all must hold contacts that reach the wall; pad unused lanes with
+    /// a copy of a used one). Time step `dt` as in [`particle_wall`].
+    pub fn evaluate(&mut self, dt: f64) {
+        #[cfg(target_arch = "x86_64")]
+        if super::avx2() {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { self.evaluate_avx2(dt) };
+            return;
+        }
+        self.evaluate_lanes(dt);
+    }
+
+    /// The lane loop compiled for AVX2: four lanes per instruction.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn evaluate_avx2(&mut self, dt: f64) {
+        self.evaluate_lanes(dt);
+    }
+
+    #[inline(always)]
+    fn evaluate_lanes(&mut self, dt: f64) {
+        for l in 0..LANES {
+            let c = PairCoeffs {
+                e_star: self.e_star[l],
+                g_star: self.g_star[l],
+                beta: self.beta[l],
+                friction: self.friction[l],
+                tangential: Tangential::History,
+                damping_ratio_t_n: self.damping_ratio_t_n[l],
+            };
+            let d = lane3(&self.d, l);
+            let ri = self.radius[l] + self.dr[l];
+            let r = d.norm_squared().sqrt();
+            let g = wall_geometry(
+                d,
+                r,
+                ri,
+                Vec3::zeros(),
+                lane3(&self.vr, l),
+                lane3(&self.omega, l),
+                self.mass[l],
+            );
+            let mut shear = lane3(&self.shear, l);
+            let cf = forces(&c, &g, dt, &mut shear);
+            self.ok[l] = r != 0.0 && g.overlap < self.radius[l] && finite(&cf);
+            set_lane3(&mut self.force, l, &cf.force_i);
+            set_lane3(&mut self.torque, l, &cf.torque_i);
+            set_lane3(&mut self.shear, l, &shear);
+            self.fnorm[l] = cf.force_i.dot(&cf.en).abs();
+        }
     }
 }
