@@ -213,8 +213,7 @@ proptest! {
             }
             (lanes.radius_i[l], lanes.radius_j[l], lanes.dri[l], lanes.drj[l]) = (bi.radius, bj.radius, dri, drj);
             (lanes.mass_i[l], lanes.mass_j[l]) = (bi.mass, bj.mass);
-            (lanes.e_star[l], lanes.g_star[l], lanes.beta[l]) = (c.e_star, c.g_star, c.beta);
-            (lanes.friction[l], lanes.damping_ratio_t_n[l]) = (c.friction, c.damping_ratio_t_n);
+            lanes.coeffs.set(l, &c);
             let mut shear = Vec3::from(sh);
             let r = particle_particle(&c, &bi, &bj, dri, drj, dt, &mut shear);
             expected.push((r, shear));
@@ -273,8 +272,7 @@ proptest! {
                 lanes.shear[a][l] = sh[a];
             }
             (lanes.radius[l], lanes.dr[l], lanes.mass[l]) = (b.radius, dri, b.mass);
-            (lanes.e_star[l], lanes.g_star[l], lanes.beta[l]) = (c.e_star, c.g_star, c.beta);
-            (lanes.friction[l], lanes.damping_ratio_t_n[l]) = (c.friction, c.damping_ratio_t_n);
+            lanes.coeffs.set(l, &c);
             let mut shear = Vec3::from(sh);
             let r = particle_wall(&c, &b, &wall, dri, dt, &mut shear);
             expected.push((r, shear));

@@ -1868,11 +1868,7 @@ impl PairCtx<'_> {
             lanes.drj[l] = dr[1];
             lanes.mass_i[l] = p.mass[i];
             lanes.mass_j[l] = p.mass[j];
-            lanes.e_star[l] = c.e_star;
-            lanes.g_star[l] = c.g_star;
-            lanes.beta[l] = c.beta;
-            lanes.friction[l] = c.friction;
-            lanes.damping_ratio_t_n[l] = c.damping_ratio_t_n;
+            lanes.coeffs.set(l, c);
             slot[n] = k;
             n += 1;
             if n == LANES {
@@ -2021,8 +2017,7 @@ impl WallCtx<'_> {
                 lanes.shear[a][l] = c.shear[a];
             }
             (lanes.radius[l], lanes.dr[l], lanes.mass[l]) = (self.radius[i], c.dr, self.mass[i]);
-            (lanes.e_star[l], lanes.g_star[l], lanes.beta[l]) = (cf.e_star, cf.g_star, cf.beta);
-            (lanes.friction[l], lanes.damping_ratio_t_n[l]) = (cf.friction, cf.damping_ratio_t_n);
+            lanes.coeffs.set(l, cf);
             slot[n] = k;
             n += 1;
             if n == LANES {

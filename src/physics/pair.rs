@@ -274,11 +274,7 @@ pub struct PairLanes {
     pub mass_i: [f64; LANES],
     pub mass_j: [f64; LANES],
     /// The pair's coefficients, lane by lane.
-    pub e_star: [f64; LANES],
-    pub g_star: [f64; LANES],
-    pub beta: [f64; LANES],
-    pub friction: [f64; LANES],
-    pub damping_ratio_t_n: [f64; LANES],
+    pub coeffs: CoeffLanes,
     /// Tangential history ξ, updated in place [m].
     pub shear: [[f64; LANES]; 3],
     /// Outputs: force on i [N], torques on i and j [N m], |F·n| [N], and whether the lane's
@@ -302,6 +298,81 @@ fn set_lane3(a: &mut [[f64; LANES]; 3], l: usize, v: &Vec3) {
     a[2][l] = v.z;
 }
 
+/// The contact coefficients of a batch, lane by lane (tangential model `history`).
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(64))]
+pub struct CoeffLanes {
+    pub e_star: [f64; LANES],
+    pub g_star: [f64; LANES],
+    pub beta: [f64; LANES],
+    pub friction: [f64; LANES],
+    pub damping_ratio_t_n: [f64; LANES],
+}
+
+impl CoeffLanes {
+    /// Gives lane `l` the coefficients `c` (whose tangential model must be `history`).
+    #[inline(always)]
+    pub fn set(&mut self, l: usize, c: &PairCoeffs) {
+        self.e_star[l] = c.e_star;
+        self.g_star[l] = c.g_star;
+        self.beta[l] = c.beta;
+        self.friction[l] = c.friction;
+        self.damping_ratio_t_n[l] = c.damping_ratio_t_n;
+    }
+
+    #[inline(always)]
+    fn get(&self, l: usize) -> PairCoeffs {
+        PairCoeffs {
+            e_star: self.e_star[l],
+            g_star: self.g_star[l],
+            beta: self.beta[l],
+            friction: self.friction[l],
+            tangential: Tangential::History,
+            damping_ratio_t_n: self.damping_ratio_t_n[l],
+        }
+    }
+
+    fn pad_from_first(&mut self, used: usize) {
+        for v in [
+            &mut self.e_star,
+            &mut self.g_star,
+            &mut self.beta,
+            &mut self.friction,
+            &mut self.damping_ratio_t_n,
+        ] {
+            let first = v[0];
+            v[used..].fill(first);
+        }
+    }
+}
+
+/// A batch of contacts evaluated lane by lane with the same formulas as the scalar contact, so
+/// that [`evaluate_batch`] can compile the loop a second time for AVX2.
+trait Batch {
+    fn evaluate_lanes(&mut self, dt: f64);
+}
+
+/// Runs a batch's lane loop, the AVX2 build of it when the CPU has AVX2 (four lanes per
+/// instruction; see [`super::avx2`]).
+#[inline]
+fn evaluate_batch<B: Batch>(b: &mut B, dt: f64) {
+    #[cfg(target_arch = "x86_64")]
+    if super::avx2() {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { evaluate_avx2(b, dt) };
+        return;
+    }
+    b.evaluate_lanes(dt);
+}
+
+/// The lane loop compiled for AVX2 (the `#[inline(always)]` loop is inlined here and takes on
+/// the target feature).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn evaluate_avx2<B: Batch>(b: &mut B, dt: f64) {
+    b.evaluate_lanes(dt);
+}
+
 impl PairLanes {
     /// Fills lanes `used..` with copies of lane 0 (a batch is always evaluated whole).
     pub fn pad_from_first(&mut self, used: usize) {
@@ -321,14 +392,10 @@ impl PairLanes {
             &mut self.drj,
             &mut self.mass_i,
             &mut self.mass_j,
-            &mut self.e_star,
-            &mut self.g_star,
-            &mut self.beta,
-            &mut self.friction,
-            &mut self.damping_ratio_t_n,
         ] {
             pad(v, used);
         }
+        self.coeffs.pad_from_first(used);
     }
 
     /// Whether [`PairLanes::evaluate`] runs vectorised on this CPU (see [`super::avx2`]). Without
@@ -341,33 +408,15 @@ impl PairLanes {
     /// Evaluates every lane (all must hold overlapping pairs; pad unused lanes with a copy of a
     /// used one). Time step `dt` as in [`particle_particle`].
     pub fn evaluate(&mut self, dt: f64) {
-        #[cfg(target_arch = "x86_64")]
-        if super::avx2() {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.evaluate_avx2(dt) };
-            return;
-        }
-        self.evaluate_lanes(dt);
+        evaluate_batch(self, dt);
     }
+}
 
-    /// The lane loop compiled for AVX2: four lanes per instruction.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn evaluate_avx2(&mut self, dt: f64) {
-        self.evaluate_lanes(dt);
-    }
-
+impl Batch for PairLanes {
     #[inline(always)]
     fn evaluate_lanes(&mut self, dt: f64) {
         for l in 0..LANES {
-            let c = PairCoeffs {
-                e_star: self.e_star[l],
-                g_star: self.g_star[l],
-                beta: self.beta[l],
-                friction: self.friction[l],
-                tangential: Tangential::History,
-                damping_ratio_t_n: self.damping_ratio_t_n[l],
-            };
+            let c = self.coeffs.get(l);
             let d = lane3(&self.d, l);
             let mut shear = lane3(&self.shear, l);
             let (ri, rj) = (self.radius_i[l], self.radius_j[l]);
@@ -445,11 +494,7 @@ pub struct WallLanes {
     pub dr: [f64; LANES],
     pub mass: [f64; LANES],
     /// The particle–wall coefficients, lane by lane.
-    pub e_star: [f64; LANES],
-    pub g_star: [f64; LANES],
-    pub beta: [f64; LANES],
-    pub friction: [f64; LANES],
-    pub damping_ratio_t_n: [f64; LANES],
+    pub coeffs: CoeffLanes,
     /// Tangential history ξ, updated in place [m].
     pub shear: [[f64; LANES]; 3],
     /// Outputs: force [N] and torque [N m] on the particle, |F·n| [N], and whether the contact
@@ -472,50 +517,24 @@ impl WallLanes {
                 pad(&mut v[a], used);
             }
         }
-        for v in [
-            &mut self.radius,
-            &mut self.dr,
-            &mut self.mass,
-            &mut self.e_star,
-            &mut self.g_star,
-            &mut self.beta,
-            &mut self.friction,
-            &mut self.damping_ratio_t_n,
-        ] {
+        for v in [&mut self.radius, &mut self.dr, &mut self.mass] {
             pad(v, used);
         }
+        self.coeffs.pad_from_first(used);
     }
 
     /// Evaluates every lane (all must hold contacts that reach the wall; pad unused lanes with
     /// a copy of a used one). Time step `dt` as in [`particle_wall`].
     pub fn evaluate(&mut self, dt: f64) {
-        #[cfg(target_arch = "x86_64")]
-        if super::avx2() {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.evaluate_avx2(dt) };
-            return;
-        }
-        self.evaluate_lanes(dt);
+        evaluate_batch(self, dt);
     }
+}
 
-    /// The lane loop compiled for AVX2: four lanes per instruction.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn evaluate_avx2(&mut self, dt: f64) {
-        self.evaluate_lanes(dt);
-    }
-
+impl Batch for WallLanes {
     #[inline(always)]
     fn evaluate_lanes(&mut self, dt: f64) {
         for l in 0..LANES {
-            let c = PairCoeffs {
-                e_star: self.e_star[l],
-                g_star: self.g_star[l],
-                beta: self.beta[l],
-                friction: self.friction[l],
-                tangential: Tangential::History,
-                damping_ratio_t_n: self.damping_ratio_t_n[l],
-            };
+            let c = self.coeffs.get(l);
             let d = lane3(&self.d, l);
             let ri = self.radius[l] + self.dr[l];
             let r = d.norm_squared().sqrt();
