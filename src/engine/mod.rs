@@ -1937,6 +1937,9 @@ struct McCounts {
     recomputed: u64,
 }
 
+/// A wall contact's result: (force, torque on the particle, |F·n|) when it touches.
+type WallOut = Option<(Vec3, Vec3, f64)>;
+
 /// Read-only view of what the wall-contact forces need (shared between threads).
 struct WallCtx<'a> {
     walls: &'a [WallFix],
@@ -1973,15 +1976,20 @@ impl WallCtx<'_> {
             return self.forces_batched(wc, force, f, torque, base);
         }
         for (c, fc) in wc.iter_mut().zip(force) {
-            let i = c.p as usize;
-            let mut shear = c.shear;
-            let r =
-                particle_wall(self.coeff(c), &self.body(i), &self.wall_point(c), c.dr, self.dt, &mut shear)
-                    .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
-            let out = r.map(|cf| (cf.force_i, cf.torque_i, cf.force_i.dot(&cf.en).abs()));
+            let (out, shear) = self.one(c)?;
             self.finish(c, fc, shear, out, f, torque, base);
         }
         Ok(())
+    }
+
+    /// One contact by [`particle_wall`]: (force, torque, |F·n|) if it touches, and its new
+    /// tangential history; a contact that cannot be integrated stops the step, naming the particle.
+    fn one(&self, c: &WallContact) -> Result<(WallOut, Vec3), StepError> {
+        let i = c.p as usize;
+        let mut shear = c.shear;
+        let r = particle_wall(self.coeff(c), &self.body(i), &self.wall_point(c), c.dr, self.dt, &mut shear)
+            .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
+        Ok((r.map(|cf| (cf.force_i, cf.torque_i, cf.force_i.dot(&cf.en).abs())), shear))
     }
 
     /// [`WallCtx::forces`] with the contacts that reach their wall evaluated in batches of
@@ -2033,7 +2041,7 @@ impl WallCtx<'_> {
     }
 
     /// Evaluates a batch and settles its contacts `slot` in order. A lane that cannot be
-    /// integrated is evaluated again by [`particle_wall`] for the error it reports.
+    /// integrated is evaluated again by [`WallCtx::one`] for the error it reports.
     #[allow(clippy::too_many_arguments)]
     fn flush(
         &self,
@@ -2049,10 +2057,7 @@ impl WallCtx<'_> {
         for (l, &k) in slot.iter().enumerate() {
             let c = &mut wc[k];
             if !lanes.ok[l] {
-                let i = c.p as usize;
-                let mut shear = c.shear;
-                particle_wall(self.coeff(c), &self.body(i), &self.wall_point(c), c.dr, self.dt, &mut shear)
-                    .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
+                self.one(c)?;
             }
             let lane = |a: &[[f64; LANES]; 3]| Vec3::new(a[0][l], a[1][l], a[2][l]);
             let out = Some((lane(&lanes.force), lane(&lanes.torque), lanes.fnorm[l]));
@@ -2070,7 +2075,7 @@ impl WallCtx<'_> {
         c: &mut WallContact,
         fc: &mut Vec3,
         shear: Vec3,
-        out: Option<(Vec3, Vec3, f64)>,
+        out: WallOut,
         f: &mut [Vec3],
         torque: &mut [Vec3],
         base: usize,

@@ -298,6 +298,13 @@ fn set_lane3(a: &mut [[f64; LANES]; 3], l: usize, v: &Vec3) {
     a[2][l] = v.z;
 }
 
+/// Lanes `used..` of one lane array take lane 0's value (a batch is always evaluated whole).
+#[inline(always)]
+fn pad(a: &mut [f64; LANES], used: usize) {
+    let first = a[0];
+    a[used..].fill(first);
+}
+
 /// The contact coefficients of a batch, lane by lane (tangential model `history`).
 #[derive(Debug, Clone, Copy, Default)]
 #[repr(C, align(64))]
@@ -340,8 +347,7 @@ impl CoeffLanes {
             &mut self.friction,
             &mut self.damping_ratio_t_n,
         ] {
-            let first = v[0];
-            v[used..].fill(first);
+            pad(v, used);
         }
     }
 }
@@ -376,10 +382,6 @@ unsafe fn evaluate_avx2<B: Batch>(b: &mut B, dt: f64) {
 impl PairLanes {
     /// Fills lanes `used..` with copies of lane 0 (a batch is always evaluated whole).
     pub fn pad_from_first(&mut self, used: usize) {
-        fn pad<const N: usize>(a: &mut [f64; N], used: usize) {
-            let first = a[0];
-            a[used..].fill(first);
-        }
         for a in 0..3 {
             for v in [&mut self.d, &mut self.vr, &mut self.omega_i, &mut self.omega_j, &mut self.shear] {
                 pad(&mut v[a], used);
@@ -508,10 +510,6 @@ pub struct WallLanes {
 impl WallLanes {
     /// Fills lanes `used..` with copies of lane 0 (a batch is always evaluated whole).
     pub fn pad_from_first(&mut self, used: usize) {
-        fn pad<const N: usize>(a: &mut [f64; N], used: usize) {
-            let first = a[0];
-            a[used..].fill(first);
-        }
         for a in 0..3 {
             for v in [&mut self.d, &mut self.vr, &mut self.omega, &mut self.shear] {
                 pad(&mut v[a], used);
