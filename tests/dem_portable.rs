@@ -1,4 +1,4 @@
-//! The AVX2 code paths chosen at run time (the batched pair forces, the multi-contact chords) give
+//! The AVX2 code paths chosen at run time (the batched pair forces, the multi-contact kernel) give
 //! the baseline x86-64 paths' results bit for bit: a dense, frictional, periodic packing is run
 //! both ways in one process (the switch is one-way, so the AVX2 runs come first) and every
 //! position, velocity and angular velocity must be identical, for Hertz and for advanced MC. On a
@@ -26,11 +26,63 @@ fn state(advanced: bool) -> Vec<u64> {
         .collect()
 }
 
+/// The multi-contact kernel alone on contact sets of 0 … 23 contacts (every offset of the AVX2
+/// kernel's four-pair chunks), with coincident, antipodal and centred points and unloaded
+/// contacts among them: radius changes, fallback flags and influence matrices, as bits.
+fn kernel_bits() -> Vec<u64> {
+    use mcdem::physics::contact_set::{influence, radius_changes, ContactLoad, McParams};
+    use mcdem::physics::ghods2022::{Cap, MprTest};
+    use mcdem::physics::Vec3;
+    let mut s: u64 = 0x6d63_6465_6d00;
+    let mut next = move || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64)
+    };
+    let mut out = Vec::new();
+    for round in 0..400 {
+        let n = round % 24;
+        let r = 1e-3;
+        let mut cs: Vec<ContactLoad> = (0..n)
+            .map(|_| {
+                let v = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+                ContactLoad {
+                    point: v * r * (0.7 + 0.3 * next()),
+                    force: if next() < 0.2 { 0.0 } else { 1e-3 * next() },
+                }
+            })
+            .collect();
+        if n > 3 {
+            cs[1].point = cs[0].point; // coincident
+            cs[2].point = -cs[0].point; // antipodal
+            cs[3].point = cs[0].point * 0.5; // on the load line (a guard of Eq. 2's third term)
+        }
+        if n > 5 && round % 3 == 0 {
+            cs[5].point = Vec3::zeros(); // at the centre: no normal
+        }
+        let nu = [0.5, 0.0, 0.3, 0.45][round % 4];
+        let cap = [
+            None,
+            Some(Cap { mpr: 0.05, test: MprTest::Abs }),
+            Some(Cap { mpr: 0.02, test: MprTest::Signed }),
+        ][round % 3];
+        let p = McParams { radius: r, youngs_modulus: 23.3e3, poisson_ratio: nu, gamma: 1.0, cap };
+        let (mut d, mut fb) = (vec![0.0; n], vec![false; n]);
+        radius_changes(&p, &cs, &mut d, &mut fb).unwrap();
+        let mut g = vec![0.0; n * n];
+        influence(&p, &cs, &mut g).unwrap();
+        out.extend(d.iter().chain(&g).map(|v| v.to_bits()));
+        out.extend(fb.iter().map(|&f| u64::from(f)));
+    }
+    out
+}
+
 #[test]
 fn avx2_paths_give_the_baseline_result_bit_for_bit() {
     let fast = [state(false), state(true)];
+    let fast_kernel = kernel_bits();
     mcdem::physics::use_portable_code();
     assert!(!mcdem::physics::avx2());
+    assert!(fast_kernel == kernel_bits(), "the AVX2 multi-contact kernel differs from the baseline one");
     for (advanced, fast) in [false, true].into_iter().zip(fast) {
         assert!(fast == state(advanced), "advanced MC {advanced}: the AVX2 paths changed the trajectory");
     }

@@ -102,6 +102,41 @@ proptest! {
         }
     }
 
+    /// The kernel against Eq. 2 written out term by term (`brodu2015::displacement`, which takes
+    /// the bracket through unit vectors and three divisions, not the kernel's one-division form):
+    /// Δ_c is the sum of the terms to round-off and the cap trips on the same contacts. Up to 19
+    /// contacts, so the kernel's padded four-pair chunks end at every offset.
+    #[test]
+    fn kernel_is_the_sum_of_eq2_terms(p in params(), cs in prop::collection::vec(contact(), 0..20)) {
+        let n = cs.len();
+        let (mut d, mut fb) = (vec![f64::NAN; n], vec![false; n]);
+        radius_changes(&p, &cs, &mut d, &mut fb).unwrap();
+        let threshold = p.loaded_threshold();
+        for c in 0..n {
+            let terms: Vec<f64> = (0..n)
+                .filter(|&k| k != c && cs[k].force > threshold)
+                .map(|k| displacement(&cs[k].point, &cs[c].point, cs[k].force, p.gamma, p.youngs_modulus, p.poisson_ratio))
+                .collect();
+            let scale: f64 = terms.iter().map(|t| t.abs()).sum();
+            let sum: f64 = terms.iter().sum();
+            let trips = |dm: f64, test: MprTest| terms.iter().any(|&t| match test {
+                MprTest::Abs => t.abs() > dm,
+                MprTest::Signed => t > dm,
+            });
+            match p.cap {
+                Some(cap) if p.gamma > 0.0 => {
+                    let dm = cap.mpr * p.radius;
+                    // Terms within round-off of δ_max may go either way.
+                    if terms.iter().any(|t| (t.abs() - dm).abs() <= 1e-12 * dm.max(t.abs())) { continue; }
+                    prop_assert_eq!(fb[c], trips(dm, cap.test), "contact {}: cap decision", c);
+                    if fb[c] { prop_assert_eq!(d[c], 0.0); continue; }
+                }
+                _ => prop_assert!(!fb[c]),
+            }
+            prop_assert!((d[c] - sum).abs() <= 1e-12 * scale, "contact {}: kernel {} vs terms {} (scale {})", c, d[c], sum, scale);
+        }
+    }
+
     #[test]
     fn kernel_does_not_depend_on_contact_order(p in params(), cs in prop::collection::vec(contact(), 2..10), rot in 1usize..9) {
         let n = cs.len();

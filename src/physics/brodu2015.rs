@@ -6,6 +6,7 @@
 //! Boussinesq's half-space point-load displacement projected on `n_c` (Johnson, Contact Mechanics,
 //! eq. 3.22), which is also what LIGGGHTS `fix multicontact/halfspace` implements.
 
+use super::lanes::Lane;
 use super::Vec3;
 
 /// Contacts closer than this (chord length, m) are treated as the same point and skipped: the
@@ -49,22 +50,24 @@ pub fn bracket_pair(n_a: &Vec3, n_b: &Vec3, u_ab: &Vec3, nu: f64) -> (f64, f64) 
 /// over one common denominator, so a pair costs one square root and one division instead of a
 /// square root and three divisions (the pair loop is bound by the divider). Equal to
 /// `bracket_pair(n_a, n_b, c/d, ν) / d` up to rounding; (0, 0) for coincident points
-/// (chord below [`MIN_CHORD`]).
+/// (chord below [`MIN_CHORD`]). Generic over [`Lane`], so the kernel evaluates four pairs at once
+/// with the same operations.
 #[inline(always)]
-pub fn bracket_pair_over_chord(a_c: f64, b_c: f64, ab: f64, d2: f64, nu: f64) -> (f64, f64) {
+pub fn bracket_pair_over_chord<L: Lane>(a_c: L, b_c: L, ab: L, d2: L, nu: f64) -> (L, L) {
+    let (zero, one) = (L::splat(0.0), L::splat(1.0));
     let d = d2.sqrt();
     // 1 + a_u = (d + a_c)/d and 1 − b_u = (d − b_c)/d: the same guards as `bracket_pair`.
     let (da, db) = (d + a_c, d - b_c);
-    let (ok_a, ok_b) = (da > MIN_DENOMINATOR * d, db > MIN_DENOMINATOR * d);
-    let (da, db) = (if ok_a { da } else { 1.0 }, if ok_b { db } else { 1.0 });
-    let coincident = d2 <= MIN_CHORD * MIN_CHORD;
-    let r = if coincident { 0.0 } else { 1.0 / (d2 * d * da * db) };
+    let (ok_a, ok_b) = (da.gt(L::splat(MIN_DENOMINATOR) * d), db.gt(L::splat(MIN_DENOMINATOR) * d));
+    let (da, db) = (L::select(ok_a, da, one), L::select(ok_b, db, one));
+    let coincident = d2.le(L::splat(MIN_CHORD * MIN_CHORD));
+    let r = L::select(coincident, zero, one / (d2 * d * da * db));
     let inv_d3 = da * db * r;
     let inv_d = d2 * inv_d3;
-    let common = a_c * b_c * inv_d3 + (3.0 - 4.0 * nu) * ab * inv_d;
-    let k = (1.0 - 2.0 * nu) * d2 * r;
-    let third_ab = if ok_a { k * (ab * d + b_c) * db } else { 0.0 };
-    let third_ba = if ok_b { k * (ab * d - a_c) * da } else { 0.0 };
+    let common = a_c * b_c * inv_d3 + L::splat(3.0 - 4.0 * nu) * ab * inv_d;
+    let k = L::splat(1.0 - 2.0 * nu) * d2 * r;
+    let third_ab = L::select(ok_a, k * (ab * d + b_c) * db, zero);
+    let third_ba = L::select(ok_b, k * (ab * d - a_c) * da, zero);
     (common - third_ab, common - third_ba)
 }
 

@@ -10,6 +10,9 @@ use std::fmt;
 
 use super::brodu2015::{bracket_pair_over_chord, compliance_prefactor};
 use super::ghods2022::{Cap, MprTest};
+#[cfg(target_arch = "x86_64")]
+use super::lanes::F64x4;
+use super::lanes::Lane;
 use super::material::{
     check, check_gamma, check_mpr, check_poisson_ratio, check_youngs_modulus, Material, MaterialError,
 };
@@ -178,13 +181,13 @@ pub fn radius_changes(
     let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
     SCRATCH.with(|s| {
         let s = &mut *s.borrow_mut();
-        s.load(contacts, pref, threshold, false);
         match p.cap.map(|c| c.test) {
-            None => s.sum_terms::<NO_CAP>(nu, &mut delta[..n]),
-            Some(MprTest::Abs) => s.sum_terms::<ABS_CAP>(nu, &mut delta[..n]),
-            Some(MprTest::Signed) => s.sum_terms::<SIGNED_CAP>(nu, &mut delta[..n]),
+            None => s.exact::<NO_CAP>(contacts, pref, threshold, nu),
+            Some(MprTest::Abs) => s.exact::<ABS_CAP>(contacts, pref, threshold, nu),
+            Some(MprTest::Signed) => s.exact::<SIGNED_CAP>(contacts, pref, threshold, nu),
         }
-        let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak)?;
+        delta[..n].copy_from_slice(&s.delta[..n]);
+        let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak[..n])?;
         Ok(KernelSummary { loaded, fallbacks })
     })
 }
@@ -275,19 +278,14 @@ pub fn influence(p: &McParams, contacts: &[ContactLoad], g: &mut [f64]) -> Resul
     let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
     SCRATCH.with(|s| {
         let s = &mut *s.borrow_mut();
-        // Every contact as a unit source of weight pref (a point at the centre still gets 0).
-        s.load(contacts, pref, 0.0, true);
-        s.chords(n, nu);
-        let w = &s.w[..n];
-        for c in 0..n {
-            g[c * n + c] = 0.0;
-        }
-        let mut k = 0;
+        s.unit_terms(contacts, pref, nu);
+        let st = s.stride;
         for a in 0..n {
-            for b in a + 1..n {
-                g[a * n + b] = s.g_ab[k] * w[a];
-                g[b * n + a] = s.g_ba[k] * w[b];
-                k += 1;
+            g[a * n + a] = 0.0;
+            let (up, back) = (&s.up[a * st..][a + 1..n], &s.back[a * st..][a + 1..n]);
+            for (b, (&t_ab, &t_ba)) in (a + 1..n).zip(up.iter().zip(back)) {
+                g[a * n + b] = t_ab;
+                g[b * n + a] = t_ba;
             }
         }
     });
@@ -442,26 +440,25 @@ const NO_CAP: u8 = 0;
 const ABS_CAP: u8 = 1;
 const SIGNED_CAP: u8 = 2;
 
-/// A neighbour term in the measure the cap compares with δ_max.
-#[inline(always)]
-fn measure<const CAP: u8>(t: f64) -> f64 {
-    if CAP == SIGNED_CAP {
-        t
-    } else {
-        t.abs()
-    }
-}
-
 thread_local! {
     /// Working memory of the kernel, one per thread: grown to the largest contact set seen and
     /// reused, so a call allocates nothing once warm (the LIGGGHTS plugin calls it per particle).
     static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
-/// The contacts of one particle by component (structure of arrays): the pair loop then runs over
-/// contiguous lanes; the chords of all pairs are then evaluated in one flat loop, which the
-/// compiler vectorises (four square roots and divisions at a time under AVX2, see
-/// [`Scratch::chords`]).
+/// Padding of the per-contact arrays and of each term row: room for the last chunk of a row in the
+/// widest lane type ([`super::lanes::F64x4`]).
+const LANES: usize = 4;
+
+/// The contacts of one particle by component (structure of arrays), padded with [`LANES`] zero
+/// contacts, and the terms of Eq. 2 between them in two row-major triangles.
+///
+/// Why this shape: a particle has few contacts (4–16), so a loop over the pairs of one row is
+/// short, and a compiled loop of unknown length spends more time in its remainder and alias checks
+/// than in its body. Every row is therefore evaluated in whole chunks of [`LANES`] pairs of a fixed
+/// length; the lanes past the last contact read the zero padding (finite, weight 0) and their
+/// results land in padding that is never read. The chunk compiles to straight vector code, one
+/// square root and one division per lane, with AVX2 chosen at run time (see [`super::avx2`]).
 #[derive(Default)]
 struct Scratch {
     px: Vec<f64>,
@@ -470,154 +467,188 @@ struct Scratch {
     nx: Vec<f64>,
     ny: Vec<f64>,
     nz: Vec<f64>,
+    /// |p_k|, the distance of the contact point from the centre.
+    len: Vec<f64>,
     /// Source weight −γ(1+ν)/(2πE) · F_k; zero for an unloaded contact (it exerts nothing).
     w: Vec<f64>,
-    /// Per unordered pair (a < b, in order): n_a·c, n_b·c, n_a·n_b and c·c of the chord
-    /// c = p_b − p_a, then Eq. 2's bracket over the chord both ways (B_ab/d, B_ba/d).
-    a_c: Vec<f64>,
-    b_c: Vec<f64>,
-    ab: Vec<f64>,
-    d2: Vec<f64>,
-    g_ab: Vec<f64>,
-    g_ba: Vec<f64>,
+    /// Row stride of `up` and `back`: n + [`LANES`], so that the last chunk of a row fits.
+    stride: usize,
+    /// `up[a·stride + b]` = t_{a→b} for b > a: the term source a adds at the later contact b.
+    up: Vec<f64>,
+    /// `back[a·stride + b]` = t_{b→a} for b > a: the term the later contact b adds at a.
+    back: Vec<f64>,
+    /// Radius change per contact (n + [`LANES`], the padding never read).
+    delta: Vec<f64>,
     /// Largest neighbour term received so far, in the cap's measure (starts at 0).
     peak: Vec<f64>,
-    /// Terms the current source receives back from the later contacts (summed in order after).
-    back: Vec<f64>,
 }
 
 impl Scratch {
-    /// Points, normals and source weights pref·F_k; `unit_sources` gives every contact the weight
-    /// pref whatever its force (the influence matrix, which the forces multiply later).
-    fn load(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, unit_sources: bool) {
+    /// Points, normals and source weights pref·F_k, padded with zero contacts; `unit_sources`
+    /// gives every contact the weight pref whatever its force (the influence matrix, which the
+    /// forces multiply later). Sizes the term rows (`up` zeroed: [`Scratch::sums`] reads whole
+    /// aligned chunks of it). The normals n = −p/|p| are divided out `L::WIDTH` contacts at a time.
+    #[inline(always)]
+    fn load<L: Lane>(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, unit_sources: bool) {
         let n = contacts.len();
-        // Lengths only: every entry is written below (`peak` must start at 0; `back` is written
-        // before it is read).
-        for v in
-            [&mut self.px, &mut self.py, &mut self.pz, &mut self.nx, &mut self.ny, &mut self.nz, &mut self.w]
-        {
-            v.resize(n, 0.0);
+        let len = n + LANES;
+        for v in [
+            &mut self.px,
+            &mut self.py,
+            &mut self.pz,
+            &mut self.len,
+            &mut self.w,
+            &mut self.nx,
+            &mut self.ny,
+            &mut self.nz,
+        ] {
+            v.clear();
+            v.resize(len, 0.0);
         }
-        self.back.resize(n, 0.0);
-        self.peak.clear();
-        self.peak.resize(n, 0.0);
+        self.stride = len;
+        self.up.clear();
+        self.up.resize(n * len, 0.0);
+        // Lengths only: `rows` writes every entry of `back`, `sums` every entry of `delta` and
+        // `peak` that is read.
+        self.back.resize(n * len, 0.0);
+        self.delta.resize(len, 0.0);
+        self.peak.resize(len, 0.0);
         for (k, c) in contacts.iter().enumerate() {
             let l = c.point.norm();
             // A point at the centre has no normal: zero normal and weight make the contact
             // neither exert nor receive a term (every term carries a normal or the weight).
-            let (nrm, w) = if l > 0.0 {
-                let w = if unit_sources {
-                    pref
-                } else if c.force > threshold {
-                    pref * c.force
-                } else {
-                    0.0
-                };
-                (-c.point / l, w)
+            self.w[k] = if l > 0.0 && unit_sources {
+                pref
+            } else if l > 0.0 && c.force > threshold {
+                pref * c.force
             } else {
-                (Vec3::zeros(), 0.0)
+                0.0
             };
-            (self.px[k], self.py[k], self.pz[k]) = (c.point.x, c.point.y, c.point.z);
-            (self.nx[k], self.ny[k], self.nz[k]) = (nrm.x, nrm.y, nrm.z);
-            self.w[k] = w;
+            (self.px[k], self.py[k], self.pz[k], self.len[k]) = (c.point.x, c.point.y, c.point.z, l);
+        }
+        let zero = L::splat(0.0);
+        let mut k0 = 0;
+        while k0 < n {
+            let l = L::load(&self.len[k0..]);
+            let has_normal = l.gt(zero);
+            for (p, nrm) in [(&self.px, &mut self.nx), (&self.py, &mut self.ny), (&self.pz, &mut self.nz)] {
+                L::select(has_normal, L::load(&p[k0..]).neg() / l, zero).store(&mut nrm[k0..]);
+            }
+            k0 += L::WIDTH;
         }
     }
 
-    /// Eq. 2's bracket over the chord, both ways, for every unordered pair of the first `n`
-    /// contacts of [`Scratch::load`], into `g_ab`, `g_ba` (pairs in row order: (0,1) … (0,n−1), (1,2) …).
-    /// Compiled for AVX2 when the CPU has it (see [`super::avx2`]): both loops are flat runs of
-    /// independent lanes, and the bracket loop has a square root and a division per lane.
-    fn chords(&mut self, n: usize, nu: f64) {
+    /// Eq. 2 for one particle: [`Scratch::load`], the terms of every pair ([`Scratch::rows`]) and
+    /// their sums in `delta` and `peak` ([`Scratch::sums`]), four pairs per instruction when the
+    /// CPU has AVX2; both paths give the same bits.
+    fn exact<const CAP: u8>(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, nu: f64) {
         #[cfg(target_arch = "x86_64")]
         if super::avx2() {
             // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.chords_avx2(n, nu) };
+            unsafe { self.exact_avx2::<CAP>(contacts, pref, threshold, nu) };
             return;
         }
-        self.chords_lanes(n, nu);
+        self.load::<f64>(contacts, pref, threshold, false);
+        self.rows::<f64>(contacts.len(), nu);
+        self.sums::<f64, CAP>(contacts.len());
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn chords_avx2(&mut self, n: usize, nu: f64) {
-        self.chords_lanes(n, nu);
+    unsafe fn exact_avx2<const CAP: u8>(
+        &mut self,
+        contacts: &[ContactLoad],
+        pref: f64,
+        threshold: f64,
+        nu: f64,
+    ) {
+        self.load::<F64x4>(contacts, pref, threshold, false);
+        self.rows::<F64x4>(contacts.len(), nu);
+        self.sums::<F64x4, CAP>(contacts.len());
     }
 
-    #[inline(always)]
-    fn chords_lanes(&mut self, n: usize, nu: f64) {
-        let m = n * n.saturating_sub(1) / 2;
-        // Lengths only: every entry is written below.
-        for v in [&mut self.a_c, &mut self.b_c, &mut self.ab, &mut self.d2, &mut self.g_ab, &mut self.g_ba] {
-            v.resize(m, 0.0);
+    /// Every contact as a unit source of weight pref and the terms of every pair: the influence
+    /// matrix in `up` and `back` (same dispatch as [`Scratch::exact`]; a point at the centre
+    /// still gets weight 0, see `load`).
+    fn unit_terms(&mut self, contacts: &[ContactLoad], pref: f64, nu: f64) {
+        #[cfg(target_arch = "x86_64")]
+        if super::avx2() {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { self.unit_terms_avx2(contacts, pref, nu) };
+            return;
         }
-        let (px, py, pz) = (&self.px[..n], &self.py[..n], &self.pz[..n]);
-        let (nx, ny, nz) = (&self.nx[..n], &self.ny[..n], &self.nz[..n]);
-        let mut k = 0;
-        for a in 0..n {
-            // Row a: pairs (a, a+1 … n−1), slices of one known length so the loop has no bounds
-            // checks and vectorises.
-            let len = n - a - 1;
-            let (pa, na) = ([px[a], py[a], pz[a]], [nx[a], ny[a], nz[a]]);
-            let (bx, by, bz) = (&px[a + 1..][..len], &py[a + 1..][..len], &pz[a + 1..][..len]);
-            let (mx, my, mz) = (&nx[a + 1..][..len], &ny[a + 1..][..len], &nz[a + 1..][..len]);
-            let (a_c, b_c) = (&mut self.a_c[k..][..len], &mut self.b_c[k..][..len]);
-            let (ab, d2) = (&mut self.ab[k..][..len], &mut self.d2[k..][..len]);
-            for b in 0..len {
-                (a_c[b], b_c[b], ab[b], d2[b]) = chord(pa, na, [bx[b], by[b], bz[b]], [mx[b], my[b], mz[b]]);
+        self.load::<f64>(contacts, pref, 0.0, true);
+        self.rows::<f64>(contacts.len(), nu);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn unit_terms_avx2(&mut self, contacts: &[ContactLoad], pref: f64, nu: f64) {
+        self.load::<F64x4>(contacts, pref, 0.0, true);
+        self.rows::<F64x4>(contacts.len(), nu);
+    }
+
+    /// Eq. 2's bracket over the chord, both ways, for every unordered pair (a, b > a) of the first
+    /// `n` contacts, times the source weights: t_{a→b} into `up`, t_{b→a} into `back`, row a.
+    /// Rows run in whole chunks of `L::WIDTH` pairs (see [`Scratch`]).
+    #[inline(always)]
+    fn rows<L: Lane>(&mut self, n: usize, nu: f64) {
+        let s = self.stride;
+        let (px, py, pz) = (&self.px[..n + LANES], &self.py[..n + LANES], &self.pz[..n + LANES]);
+        let (nx, ny, nz) = (&self.nx[..n + LANES], &self.ny[..n + LANES], &self.nz[..n + LANES]);
+        let w = &self.w[..n + LANES];
+        for a in 0..n.saturating_sub(1) {
+            let pa = [L::splat(px[a]), L::splat(py[a]), L::splat(pz[a])];
+            let na = [L::splat(nx[a]), L::splat(ny[a]), L::splat(nz[a])];
+            let wa = L::splat(w[a]);
+            let (up, back) = (&mut self.up[a * s..][..s], &mut self.back[a * s..][..s]);
+            let mut b0 = a + 1;
+            while b0 < n {
+                let pb = [L::load(&px[b0..]), L::load(&py[b0..]), L::load(&pz[b0..])];
+                let nb = [L::load(&nx[b0..]), L::load(&ny[b0..]), L::load(&nz[b0..])];
+                let (a_c, b_c, ab, d2) = chord(pa, na, pb, nb);
+                let (g_ab, g_ba) = bracket_pair_over_chord(a_c, b_c, ab, d2, nu);
+                (g_ab * wa).store(&mut up[b0..]);
+                (g_ba * L::load(&w[b0..])).store(&mut back[b0..]);
+                b0 += L::WIDTH;
             }
-            k += len;
-        }
-        self.bracket_lanes(nu);
-    }
-
-    /// Eq. 2's bracket over the chord for every pair: independent lanes, a square root and a
-    /// division each.
-    #[inline(always)]
-    fn bracket_lanes(&mut self, nu: f64) {
-        let m = self.d2.len();
-        let (a_c, b_c, ab, d2) = (&self.a_c[..m], &self.b_c[..m], &self.ab[..m], &self.d2[..m]);
-        for (k, (g_ab, g_ba)) in self.g_ab[..m].iter_mut().zip(&mut self.g_ba[..m]).enumerate() {
-            (*g_ab, *g_ba) = bracket_pair_over_chord(a_c[k], b_c[k], ab[k], d2[k], nu);
         }
     }
 
-    /// Eq. 2 summed over every source for every target, each unordered pair visited once (one
-    /// chord and one square root serve both directions). For every target the terms arrive in
-    /// increasing source index, so the sums do not depend on how the pairs are visited.
+    /// Δ_c = Σ_k t_{k→c} and the cap's peaks for the first `n` contacts, every target summing its
+    /// terms in increasing source index: first the earlier sources, down the columns of `up` in
+    /// aligned chunks of targets held in registers (`up` is zero where a source does not precede
+    /// a target, and adding +0 changes no sum), then each target's own row of `back`, in order.
     #[inline(always)]
-    fn sum_terms<const CAP: u8>(&mut self, nu: f64, delta: &mut [f64]) {
-        let n = delta.len();
-        self.chords(n, nu);
-        let w = &self.w[..n];
-        let (peak, back) = (&mut self.peak[..n], &mut self.back[..n]);
-        let mut k = 0;
-        for a in 0..n {
-            let len = n - a - 1;
-            let wa = w[a];
-            // Row a as slices of one known length (no bounds checks: the loop vectorises).
-            let (g_ab, g_ba) = (&self.g_ab[k..][..len], &self.g_ba[k..][..len]);
-            let (w_b, back_b) = (&w[a + 1..][..len], &mut back[a + 1..][..len]);
-            let (d_a, d_b) = delta.split_at_mut(a + 1);
-            let (p_a, p_b) = peak.split_at_mut(a + 1);
-            let (d_b, p_b) = (&mut d_b[..len], &mut p_b[..len]);
-            for b in 0..len {
-                let t_ab = g_ab[b] * wa;
-                back_b[b] = g_ba[b] * w_b[b];
-                d_b[b] += t_ab;
+    fn sums<L: Lane, const CAP: u8>(&mut self, n: usize) {
+        let s = self.stride;
+        let (delta, peak) = (&mut self.delta[..n + LANES], &mut self.peak[..n + LANES]);
+        let mut c0 = 0;
+        while c0 < n {
+            let (mut acc, mut pk) = (L::splat(0.0), L::splat(0.0));
+            // Sources before the chunk's last target (and before the last contact).
+            for a in 0..(c0 + L::WIDTH - 1).min(n - 1) {
+                let t = L::load(&self.up[a * s + c0..]);
+                acc = acc + t;
                 if CAP != NO_CAP {
-                    p_b[b] = p_b[b].max(measure::<CAP>(t_ab));
+                    pk = peak_of::<L, CAP>(pk, t);
                 }
             }
-            let (mut acc, mut pk) = (d_a[a], p_a[a]);
-            for &t in back_b.iter() {
+            acc.store(&mut delta[c0..]);
+            pk.store(&mut peak[c0..]);
+            c0 += L::WIDTH;
+        }
+        for a in 0..n {
+            let back = &self.back[a * s..][a + 1..n];
+            let (mut acc, mut pk) = (delta[a], peak[a]);
+            for &t in back {
                 acc += t;
                 if CAP != NO_CAP {
-                    pk = pk.max(measure::<CAP>(t));
+                    pk = peak_of::<f64, CAP>(pk, t);
                 }
             }
-            d_a[a] = acc;
-            p_a[a] = pk;
-            k += len;
+            delta[a] = acc;
+            peak[a] = pk;
         }
     }
 
@@ -633,17 +664,27 @@ impl Scratch {
                 let t = gk * fk;
                 *dc += t;
                 if CAP != NO_CAP {
-                    *pc = pc.max(measure::<CAP>(t));
+                    *pc = peak_of::<f64, CAP>(*pc, t);
                 }
             }
         }
     }
 }
 
+/// The running peak after one more term: max(peak, m) with m the term in the measure the cap
+/// compares with δ_max (|t|, or t for `signed`). The peak starts at 0 and is never
+/// NaN, so this is `f64::max` (a NaN term leaves the peak alone, as max does), written as a
+/// comparison and a select so that it also runs on lanes.
+#[inline(always)]
+fn peak_of<L: Lane, const CAP: u8>(peak: L, t: L) -> L {
+    let m = if CAP == SIGNED_CAP { t } else { t.abs() };
+    L::select(m.gt(peak), m, peak)
+}
+
 /// The chord c = p_b − p_a of contacts a and b (points p, inward normals n) as Eq. 2's bracket
 /// reads it: (n_a·c, n_b·c, n_a·n_b, c·c).
 #[inline(always)]
-fn chord(pa: [f64; 3], na: [f64; 3], pb: [f64; 3], nb: [f64; 3]) -> (f64, f64, f64, f64) {
+fn chord<L: Lane>(pa: [L; 3], na: [L; 3], pb: [L; 3], nb: [L; 3]) -> (L, L, L, L) {
     let (cx, cy, cz) = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]);
     let d2 = cx * cx + cy * cy + cz * cz;
     let a_c = na[0] * cx + na[1] * cy + na[2] * cz;

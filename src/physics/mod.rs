@@ -17,6 +17,7 @@ pub mod brodu2015;
 pub mod contact_set;
 pub mod ghods2022;
 pub mod hertz;
+pub mod lanes;
 pub mod material;
 pub mod pair;
 
