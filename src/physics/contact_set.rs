@@ -182,9 +182,9 @@ pub fn radius_changes(
     SCRATCH.with(|s| {
         let s = &mut *s.borrow_mut();
         match p.cap.map(|c| c.test) {
-            None => s.exact::<NO_CAP>(contacts, pref, threshold, nu),
-            Some(MprTest::Abs) => s.exact::<ABS_CAP>(contacts, pref, threshold, nu),
-            Some(MprTest::Signed) => s.exact::<SIGNED_CAP>(contacts, pref, threshold, nu),
+            None => s.run::<NO_CAP>(Pass::RadiusChanges, contacts, pref, threshold, nu),
+            Some(MprTest::Abs) => s.run::<ABS_CAP>(Pass::RadiusChanges, contacts, pref, threshold, nu),
+            Some(MprTest::Signed) => s.run::<SIGNED_CAP>(Pass::RadiusChanges, contacts, pref, threshold, nu),
         }
         delta[..n].copy_from_slice(&s.delta[..n]);
         let fallbacks = finish(p, &mut delta[..n], &mut hertz_fallback[..n], &s.peak[..n])?;
@@ -278,7 +278,8 @@ pub fn influence(p: &McParams, contacts: &[ContactLoad], g: &mut [f64]) -> Resul
     let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
     SCRATCH.with(|s| {
         let s = &mut *s.borrow_mut();
-        s.unit_terms(contacts, pref, nu);
+        // Unit sources: the threshold and the cap play no part.
+        s.run::<NO_CAP>(Pass::Influence, contacts, pref, 0.0, nu);
         let st = s.stride;
         for a in 0..n {
             g[a * n + a] = 0.0;
@@ -440,6 +441,15 @@ const NO_CAP: u8 = 0;
 const ABS_CAP: u8 = 1;
 const SIGNED_CAP: u8 = 2;
 
+/// What a [`Scratch::run`] computes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// Radius changes from this step's forces ([`radius_changes`]).
+    RadiusChanges,
+    /// The influence matrix: every contact a unit source, no sums ([`influence`]).
+    Influence,
+}
+
 thread_local! {
     /// Working memory of the kernel, one per thread: grown to the largest contact set seen and
     /// reused, so a call allocates nothing once warm (the LIGGGHTS plugin calls it per particle).
@@ -538,54 +548,55 @@ impl Scratch {
         }
     }
 
-    /// Eq. 2 for one particle: [`Scratch::load`], the terms of every pair ([`Scratch::rows`]) and
-    /// their sums in `delta` and `peak` ([`Scratch::sums`]), four pairs per instruction when the
-    /// CPU has AVX2; both paths give the same bits.
-    fn exact<const CAP: u8>(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, nu: f64) {
-        #[cfg(target_arch = "x86_64")]
-        if super::avx2() {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.exact_avx2::<CAP>(contacts, pref, threshold, nu) };
-            return;
-        }
-        self.load::<f64>(contacts, pref, threshold, false);
-        self.rows::<f64>(contacts.len(), nu);
-        self.sums::<f64, CAP>(contacts.len());
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn exact_avx2<const CAP: u8>(
+    /// One kernel pass over a particle's contacts: [`Scratch::load`] and the terms of every pair
+    /// ([`Scratch::rows`]); for [`Pass::RadiusChanges`] also their sums in `delta` and `peak`
+    /// ([`Scratch::sums`]), while [`Pass::Influence`] gives every contact the unit weight pref and
+    /// leaves the matrix in `up` and `back`. Four pairs per instruction when the CPU has AVX2;
+    /// both paths give the same bits.
+    fn run<const CAP: u8>(
         &mut self,
+        pass: Pass,
         contacts: &[ContactLoad],
         pref: f64,
         threshold: f64,
         nu: f64,
     ) {
-        self.load::<F64x4>(contacts, pref, threshold, false);
-        self.rows::<F64x4>(contacts.len(), nu);
-        self.sums::<F64x4, CAP>(contacts.len());
-    }
-
-    /// Every contact as a unit source of weight pref and the terms of every pair: the influence
-    /// matrix in `up` and `back` (same dispatch as [`Scratch::exact`]; a point at the centre
-    /// still gets weight 0, see `load`).
-    fn unit_terms(&mut self, contacts: &[ContactLoad], pref: f64, nu: f64) {
         #[cfg(target_arch = "x86_64")]
         if super::avx2() {
             // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.unit_terms_avx2(contacts, pref, nu) };
+            unsafe { self.run_avx2::<CAP>(pass, contacts, pref, threshold, nu) };
             return;
         }
-        self.load::<f64>(contacts, pref, 0.0, true);
-        self.rows::<f64>(contacts.len(), nu);
+        self.run_lanes::<f64, CAP>(pass, contacts, pref, threshold, nu);
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn unit_terms_avx2(&mut self, contacts: &[ContactLoad], pref: f64, nu: f64) {
-        self.load::<F64x4>(contacts, pref, 0.0, true);
-        self.rows::<F64x4>(contacts.len(), nu);
+    unsafe fn run_avx2<const CAP: u8>(
+        &mut self,
+        pass: Pass,
+        contacts: &[ContactLoad],
+        pref: f64,
+        threshold: f64,
+        nu: f64,
+    ) {
+        self.run_lanes::<F64x4, CAP>(pass, contacts, pref, threshold, nu);
+    }
+
+    #[inline(always)]
+    fn run_lanes<L: Lane, const CAP: u8>(
+        &mut self,
+        pass: Pass,
+        contacts: &[ContactLoad],
+        pref: f64,
+        threshold: f64,
+        nu: f64,
+    ) {
+        self.load::<L>(contacts, pref, threshold, pass == Pass::Influence);
+        self.rows::<L>(contacts.len(), nu);
+        if pass == Pass::RadiusChanges {
+            self.sums::<L, CAP>(contacts.len());
+        }
     }
 
     /// Eq. 2's bracket over the chord, both ways, for every unordered pair (a, b > a) of the first

@@ -75,8 +75,10 @@ impl Lane for f64 {
     }
 }
 
+// Crate-internal: AVX2 code runs only behind the run-time check, so no safe code outside the core
+// may get hold of a value.
 #[cfg(target_arch = "x86_64")]
-pub use avx::F64x4;
+pub(crate) use avx::F64x4;
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
@@ -87,7 +89,7 @@ mod avx {
     /// Four f64 lanes in an AVX register. Only for code compiled with AVX2 enabled and reached
     /// after [`crate::physics::avx2`] said yes: every method is inlined into such a function.
     #[derive(Clone, Copy)]
-    pub struct F64x4(__m256d);
+    pub(crate) struct F64x4(__m256d);
 
     // SAFETY (every block below): the methods are `#[inline(always)]` and only called from
     // functions compiled with `#[target_feature(enable = "avx2")]` behind a run-time check.

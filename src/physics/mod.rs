@@ -22,10 +22,10 @@ pub mod material;
 pub mod pair;
 
 /// Whether this CPU has AVX2. The compiler vectorises loops with square roots and divisions only
-/// under AVX2's cost model, not under the x86-64 baseline's; the two hot loops of the core (a
-/// batch of pair forces, the multi-contact sums) are therefore compiled a second time for AVX2 and
-/// chosen here at run time. Rust never fuses a product and a sum on its own, so both builds give
-/// the same results bit for bit.
+/// under AVX2's cost model, not under the x86-64 baseline's; the batch of pair forces is therefore
+/// compiled a second time for AVX2, and the multi-contact kernel runs on explicit AVX2 lanes
+/// ([`lanes`]), both chosen here at run time. Rust never fuses a product and a sum on its own, so
+/// both paths give the same results bit for bit.
 #[inline]
 pub fn avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
