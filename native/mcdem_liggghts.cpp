@@ -193,6 +193,11 @@ const double kContactDistanceFactor = 1.2;
 // pairRadii concerns pairs only (a wall contact always uses the modified radius): walls may give any.
 enum SharedSetting { kMprTest, kGeometryTolerance, kUpdateEvery, kSharedSettings };
 
+// A pair's record (after its two radii and |F_n|): the radius changes of the partner with the
+// smaller and with the larger atom ID at this contact.
+const int kPairDrLo = 3;
+const int kPairDrHi = 4;
+
 }  // namespace
 
 namespace LIGGGHTS {
@@ -254,6 +259,10 @@ public:
             record_offset_ = hsetup->add_history_value("mcdem_radius_lo", "0");
             hsetup->add_history_value("mcdem_radius_hi", "0");
             hsetup->add_history_value("mcdem_fn", "0");
+            // This step's radius changes of both partners at this contact (see copy_to_pair_records),
+            // read by the pair loop (McPairLoop) without searching the per-atom store.
+            hsetup->add_history_value("mcdem_dr_lo", "0");
+            hsetup->add_history_value("mcdem_dr_hi", "0");
         }
         c->add_history_offset(kRecordName, record_offset_);
     }
@@ -614,6 +623,7 @@ private:
         const int nlocal = atom->nlocal;
         double **x = atom->x;
         const int *tag = atom->tag;
+        pair_rows_.clear();
         const int *type = atom->type;
         const double *radius = atom->radius;
 
@@ -641,6 +651,14 @@ private:
                         h.compute_surfPos(i, jj, x, rec, pij, pji, f_eps);
                     }
                     pij[3] = pji[3] = h.get_fn(rec);
+                    if (list) {
+                        // add_partner appends: the rows this record fills are the current ends,
+                        // known here so that step 4 needs no search (ghost rows are replaced by the
+                        // forward communication, so a ghost partner is searched there).
+                        const int j = list->firstneigh[i][jj] & NEIGHMASK;
+                        FixContactPropertyAtom *st = sources_[s].store;
+                        pair_rows_.push_back(PairRow(i, jj, st->get_npartners(i), j < nlocal ? st->get_npartners(j) : -1));
+                    }
                     if (h.get_type() == 'm') {
                         // The library's HistoryData names the row by the triangle in the tracker's
                         // jj-th slot, while the record it read is that of the jj-th contact (slots
@@ -697,6 +715,51 @@ private:
         // 3. Ghost copies see their owners' radius changes (with several MPI ranks a pair across a
         //    sub-domain boundary reads its partner's row from the ghost).
         for (size_t s = 0; s < sources_.size(); s++) sources_[s].store->do_forward_comm();
+
+        // 4. Both partners' radius changes into each pair's record, where the pair loop reads them.
+        copy_to_pair_records();
+    }
+
+    // The pair loop needs, for every neighbour pair (i, j), the radius change of i at j and of j at
+    // i: the values the store holds under the partner's ID, or 0 where it holds none. The
+    // library's loop searches the store for them twice per neighbour pair and step; here they are
+    // taken once per update from the rows step 1 filled (a search only for ghost partners, whose
+    // rows the forward communication brought) and kept in the pair's record by atom ID, like its
+    // radii, so the loop reads them directly. Same values, so the same forces bit for bit.
+    void copy_to_pair_records() {
+        McSource &src = sources_[0];
+        HistoryData &h = src.history;
+        FixContactPropertyAtom *st = src.store;
+        const NeighList *list = static_cast<PairGranProxy *>(h.get_ptr())->list;
+        const int nlocal = atom->nlocal;
+        const int *tag = atom->tag;
+        for (int i = 0; i < nlocal; i++) {
+            const int n = h.get_npartners(i);
+            for (int jj = 0; jj < n; jj++) {
+                double *rec = h.get_data_ptr(i, jj);
+                const int j = list->firstneigh[i][jj] & NEIGHMASK;
+                double dri = 0.0, drj = 0.0;
+                if (j >= nlocal) {
+                    const int ci = st->has_partner(i, tag[j]);
+                    const int cj = st->has_partner(j, tag[i]);
+                    if (ci != -1) dri = st->contacthistory(i, ci)[3];
+                    if (cj != -1) drj = st->contacthistory(j, cj)[3];
+                }
+                write_pair_radius_changes(rec, tag[i] < tag[j], dri, drj);
+            }
+        }
+        for (size_t k = 0; k < pair_rows_.size(); k++) {
+            const PairRow &r = pair_rows_[k];
+            if (r.row_j < 0) continue;
+            const int j = list->firstneigh[r.i][r.jj] & NEIGHMASK;
+            write_pair_radius_changes(h.get_data_ptr(r.i, r.jj), tag[r.i] < tag[j], st->contacthistory(r.i, r.row_i)[3],
+                                      st->contacthistory(j, r.row_j)[3]);
+        }
+    }
+
+    static void write_pair_radius_changes(double *rec, bool i_first, double dri, double drj) {
+        rec[kPairDrLo] = i_first ? dri : drj;
+        rec[kPairDrHi] = i_first ? drj : dri;
     }
 
     // Empties a wall store's rows for this step (see McSource). Mesh walls keep the library's rows:
@@ -744,6 +807,12 @@ private:
     std::vector<std::vector<mcdem_pair_coeffs> > coeffs_;
     bool sources_ready_;
     std::vector<McSource> sources_;
+    // Step 1's pair records: list entry (i, jj) and the store rows of i and of a local j it filled.
+    struct PairRow {
+        int i, jj, row_i, row_j;
+        PairRow(int i_, int jj_, int ri, int rj) : i(i_), jj(jj_), row_i(ri), row_j(rj) {}
+    };
+    std::vector<PairRow> pair_rows_;
     std::vector<double *> rows_;
     std::vector<mcdem_contact_load> loads_;
     std::vector<double> delta_;
@@ -758,6 +827,195 @@ private:
 std::map<LAMMPS *, NormalModel<MC_ADVANCED> *> NormalModel<MC_ADVANCED>::pair_models_;
 
 }  // namespace ContactModels
+}  // namespace LIGGGHTS
+
+namespace LIGGGHTS {
+namespace PairStyles {
+
+inline void add_force(double relax, double *f, double *torque, const ForceData &d) {
+    for (int k = 0; k < 3; k++) {
+        f[k] += relax * d.delta_F[k];
+        torque[k] += relax * d.delta_torque[k];
+    }
+}
+
+// A contact's force on `atom` from partner `partner_tag`, recorded once per step: force and torque
+// (other < 0), or force and the partner's index (the stress store).
+inline void store_partner_pair(FixContactPropertyAtom *store, int atom, int partner_tag, const ForceData &d,
+                               int other) {
+    if (store->has_partner(atom, partner_tag) != -1) return;
+    double row[6];
+    vectorCopy3D(d.delta_F, &row[0]);
+    if (other < 0)
+        vectorCopy3D(d.delta_torque, &row[3]);
+    else
+        row[3] = static_cast<double>(other);
+    store->add_partner(atom, partner_tag, row);
+}
+
+// The pair loop of `model mc_advanced`. It evaluates the neighbour pairs as the library's loop
+// for spheres does (same broad-phase tests, same sub-model calls, same outputs: forces and
+// torques, virial, compute pair/gran/local, stored contact forces, summed normal forces), with
+// one change: each partner's multi-contact radius change at the contact is read from the pair's
+// record (copy_to_pair_records) instead of being searched for in the per-atom store, twice per
+// neighbour pair and step. That search made a pair cost a fixed amount more than with `hertz`,
+// whatever the multi-contact update interval.
+template <typename Model>
+void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, ForceData &i_forces,
+                  ForceData &j_forces, PairGran *pg, int eflag, int vflag, int addflag) {
+    if (eflag || vflag)
+        pg->ev_setup(eflag, vflag);
+    else
+        pg->evflag = pg->vflag_fdotr = 0;
+    Atom *atom = lmp->atom;
+    double **x = atom->x, **v = atom->v, **f = atom->f, **omega = atom->omega, **torque = atom->torque;
+    const double *radius = atom->radius, *rmass = atom->rmass, *mass = atom->mass;
+    const int *type = atom->type, *mask = atom->mask, *tag = atom->tag;
+    const int nlocal = atom->nlocal;
+    const bool newton_pair = lmp->force->newton_pair;
+    const NeighList *list = pg->list;
+    int **first_flag = pg->listgranhistory ? pg->listgranhistory->firstneigh : NULL;
+    double **first_hist = pg->listgranhistory ? pg->listgranhistory->firstdouble : NULL;
+    const int dnum = pg->dnum();
+    // Where each pair's radius changes sit; without a record (no history) none are applied.
+    const int rec = first_hist && pg->storeSumDelta() ? cmodel.get_history_offset(kRecordName) : -1;
+    const int freeze_bit = pg->freeze_group_bit();
+    const double close_sq = lmp->neighbor->contactDistanceFactor * lmp->neighbor->contactDistanceFactor;
+    const bool store_forces = pg->storeContactForces() && lmp->update->ntimestep % pg->storeContactForcesEvery() == 0;
+    const bool store_stress = pg->storeContactForcesStress();
+    const bool pair_local = pg->cpl() && addflag;
+    std::vector<FixInsertStreamPredefined *> inserters;
+    for (int k = 0; k < lmp->modify->n_fixes_style("insert/stream/predefined"); k++) {
+        FixInsertStreamPredefined *fi =
+            static_cast<FixInsertStreamPredefined *>(lmp->modify->find_fix_style("insert/stream/predefined", k));
+        if (fi->has_inserted()) inserters.push_back(fi);
+    }
+
+    std::memset(&sidata, 0, sizeof(SurfacesIntersectData));
+    std::memset(&i_forces, 0, sizeof(ForceData));
+    std::memset(&j_forces, 0, sizeof(ForceData));
+    sidata.area_ratio = 1.0;
+    sidata.is_wall = false;
+    sidata.computeflag = pg->computeflag();
+    sidata.shearupdate = pg->shearupdate();
+    cmodel.beginPass(sidata, i_forces, j_forces);
+
+    for (int ii = 0; ii < list->inum; ii++) {
+        const int i = list->ilist[ii];
+        int *flags = first_flag ? first_flag[i] : NULL;
+        double *hist = first_hist ? first_hist[i] : NULL;
+        const int *jlist = list->firstneigh[i];
+        sidata.i = i;
+        // The library's convention: radi stays the original radius, radj and the radius sum
+        // carry the radius changes (NormalModel<MC_ADVANCED> recovers i's from their difference).
+        sidata.radi = radius[i];
+        for (int jj = 0; jj < list->numneigh[i]; jj++) {
+            const int j = jlist[jj] & NEIGHMASK;
+            double del[3];
+            for (int k = 0; k < 3; k++) del[k] = x[i][k] - x[j][k];
+            const double rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
+            double radi = radius[i], radj = radius[j];
+            if (rec >= 0) {
+                const double *r = &hist[dnum * jj + rec];
+                const bool i_first = tag[i] < tag[j];
+                radi += r[i_first ? kPairDrLo : kPairDrHi];
+                radj += r[i_first ? kPairDrHi : kPairDrLo];
+            }
+            const double radsum = radi + radj;
+            sidata.radj = radj;
+            sidata.radsum = radsum;
+            sidata.j = j;
+            for (int k = 0; k < 3; k++) sidata.delta[k] = del[k];
+            sidata.rsq = rsq;
+            sidata.contact_flags = flags ? &flags[jj] : NULL;
+            sidata.contact_history = hist ? &hist[dnum * jj] : NULL;
+            for (size_t k = 0; k < inserters.size(); k++) inserters[k]->copy_history(i, j, sidata.contact_history);
+            i_forces.reset();
+            j_forces.reset();
+            sidata.v_i = v[i];
+            sidata.v_j = v[j];
+            sidata.itype = type[i];
+            sidata.jtype = type[j];
+
+            if (rsq < radsum * radsum && cmodel.checkSurfaceIntersect(sidata)) {
+                const double r = std::sqrt(rsq);
+                const double rinv = 1.0 / r;
+                double mi = rmass ? rmass[i] : mass[type[i]];
+                double mj = rmass ? rmass[j] : mass[type[j]];
+                if (pg->fr_pair()) {
+                    const double *mr = pg->mr_pair();
+                    if (mr[i] > 0.0) mi = mr[i];
+                    if (mr[j] > 0.0) mj = mr[j];
+                }
+                double meff = mi * mj / (mi + mj);
+                if (mask[i] & freeze_bit) meff = mj;
+                if (mask[j] & freeze_bit) meff = mi;
+                sidata.r = r;
+                sidata.rinv = rinv;
+                sidata.meff = meff;
+                sidata.mi = mi;
+                sidata.mj = mj;
+                if (atom->sphere_flag)
+                    for (int k = 0; k < 3; k++) sidata.en[k] = del[k] * rinv;
+                sidata.omega_i = omega[i];
+                sidata.omega_j = omega[j];
+                cmodel.surfacesIntersect(sidata, i_forces, j_forces);
+                cmodel.endSurfacesIntersect(sidata, 0, i_forces, j_forces);
+                sidata.has_force_update = true;
+            } else if (rsq < close_sq * radsum * radsum && !atom->shapetype_flag) {
+                sidata.has_force_update = false;
+                cmodel.surfacesClose(sidata, i_forces, j_forces);
+            } else {
+                sidata.has_force_update = false;
+            }
+            if (!sidata.has_force_update) continue;
+
+            if (sidata.computeflag) {
+                add_force(pg->relax(i), f[i], torque[i], i_forces);
+                if (newton_pair || j < nlocal) add_force(pg->relax(j), f[j], torque[j], j_forces);
+                if (pg->store_sum_normal_force()) {
+                    const double fdotn = vectorDot3D(i_forces.delta_F, sidata.en);
+                    *pg->get_sum_normal_force_ptr(i) += fdotn;
+                    if (newton_pair || j < nlocal) *pg->get_sum_normal_force_ptr(j) += fdotn;
+                }
+            }
+            if (pair_local) pg->cpl_add_pair(sidata, i_forces);
+            if (pg->evflag)
+                pg->ev_tally_xyz(i, j, nlocal, newton_pair, 0.0, 0.0, i_forces.delta_F[0], i_forces.delta_F[1],
+                                 i_forces.delta_F[2], del[0], del[1], del[2]);
+            if (store_forces) {
+                store_partner_pair(pg->fix_contact_forces(), i, tag[j], i_forces, -1);
+                store_partner_pair(pg->fix_contact_forces(), j, tag[i], j_forces, -1);
+            }
+            if (store_stress) {
+                store_partner_pair(pg->fix_contact_forces_stress(), i, tag[j], i_forces, j);
+                store_partner_pair(pg->fix_contact_forces_stress(), j, tag[i], j_forces, i);
+            }
+        }
+    }
+
+    cmodel.endPass(sidata, i_forces, j_forces);
+    if (pair_local) pg->cpl_pair_finalize();
+    if (pg->storeContactForces()) pg->fix_contact_forces()->do_forward_comm();
+    if (store_stress) pg->fix_contact_forces_stress()->do_forward_comm();
+}
+
+typedef ContactModel<GranStyle<MC_ADVANCED, TANGENTIAL_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT> >
+    McHistoryModel;
+typedef ContactModel<GranStyle<MC_ADVANCED, TANGENTIAL_NO_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT> >
+    McNoHistoryModel;
+
+template <>
+void Granular<McHistoryModel>::compute_force(PairGran *pg, int eflag, int vflag, int addflag) {
+    mc_pair_loop(lmp, cmodel, *aligned_sidata, *aligned_i_forces, *aligned_j_forces, pg, eflag, vflag, addflag);
+}
+
+template <>
+void Granular<McNoHistoryModel>::compute_force(PairGran *pg, int eflag, int vflag, int addflag) {
+    mc_pair_loop(lmp, cmodel, *aligned_sidata, *aligned_i_forces, *aligned_j_forces, pg, eflag, vflag, addflag);
+}
+
+}  // namespace PairStyles
 }  // namespace LIGGGHTS
 
 namespace {

@@ -88,6 +88,79 @@ fn mpr_zero_is_stock_hertz_two_particles_and_plate() {
     assert!(d <= PRINT_PRECISION, "max relative difference {d:e}");
 }
 
+/// The plugin evaluates pairs in its own loop (native/mcdem_liggghts.cpp, `mc_pair_loop`): what the
+/// library's loop hands to its outputs must come out the same. With MPR = 0, `compute
+/// pair/gran/local` (dump local: positions, IDs, force, contact area, overlap of every contact) and
+/// `compute stress/atom` (the virial tallied per pair) equal stock Hertz's to print precision.
+#[test]
+fn mpr_zero_is_stock_hertz_in_contact_and_stress_output() {
+    let tmp = TempDir::new().unwrap();
+    // The deck with the pair virial per atom added to its dump (the Rust engine, which also runs
+    // the deck, has no `compute stress/atom`).
+    let text = std::fs::read_to_string(decks().join("two_particles.in")).unwrap();
+    let dump = "omegax omegay omegaz radius";
+    assert!(text.contains(dump));
+    let text = text
+        .replace("dump            d ", "compute         st all stress/atom pair\ndump            d ")
+        .replace(dump, &format!("{dump} c_st[1] c_st[2] c_st[3] c_st[4] c_st[5] c_st[6]"))
+        .replace("%.10g\"\n", &format!("%.10g{}\"\n", " %.10g".repeat(6)));
+    let deck = tmp.path().join("two_particles_stress.in");
+    std::fs::write(&deck, text).unwrap();
+    let deck = deck.to_str().unwrap();
+    let common = [("mpr", "0"), ("cdf", "1.2")];
+    run_ok(tmp.path(), deck, &[&common[..], &[("dump", "mc.dump"), ("contacts", "mc_c.dump")]].concat());
+    run_ok(
+        tmp.path(),
+        deck,
+        &[&common[..], &[("law", "1"), ("dump", "stock.dump"), ("contacts", "stock_c.dump")]].concat(),
+    );
+    // Largest difference of a column over its largest magnitude, frames and rows aligned.
+    let compare = |a: &[Frame], b: &[Frame], columns: &[usize]| -> f64 {
+        assert_eq!(a.len(), b.len());
+        let mut worst = 0.0_f64;
+        for &c in columns {
+            // A column that is zero throughout (the y components: motion in the x-z plane) must
+            // stay zero: any difference over a zero scale is infinite.
+            let scale = b.iter().flat_map(|f| f.rows.iter().map(move |r| r[c].abs())).fold(0.0, f64::max);
+            for (fa, fb) in a.iter().zip(b) {
+                assert_eq!((fa.step, fa.rows.len()), (fb.step, fb.rows.len()), "frames differ");
+                for (ra, rb) in fa.rows.iter().zip(&fb.rows) {
+                    let d = (ra[c] - rb[c]).abs();
+                    if d > 0.0 {
+                        worst = worst.max(d / scale);
+                    }
+                }
+            }
+        }
+        worst
+    };
+    let (a, b) = (read_dump(&tmp.path().join("mc_c.dump")), read_dump(&tmp.path().join("stock_c.dump")));
+    assert!(b.iter().filter(|f| !f.rows.is_empty()).count() >= 5, "too few frames with a contact");
+    assert_eq!(b[0].columns.len(), 14);
+    // Dump local prints 6 digits; every column, the force's x and z components among them.
+    for c in [9, 11] {
+        assert!(b.iter().any(|f| f.rows.iter().any(|r| r[c] != 0.0)), "no contact force in the dump");
+    }
+    let d_local = compare(&a, &b, &(0..14).collect::<Vec<_>>());
+    eprintln!("contacts: max relative difference {d_local:e}");
+    assert!(d_local <= 1e-5, "dump local: max relative difference {d_local:e}");
+    let (a, b) = (read_dump(&tmp.path().join("mc.dump")), read_dump(&tmp.path().join("stock.dump")));
+    let stress: Vec<usize> = ["c_st[1]", "c_st[3]", "c_st[5]"]
+        .iter()
+        .map(|n| b[0].columns.iter().position(|c| c == n).expect("stress column"))
+        .collect();
+    for &c in &stress {
+        assert!(
+            b.iter().any(|f| f.rows.iter().any(|r| r[c] != 0.0)),
+            "{} is zero throughout",
+            b[0].columns[c]
+        );
+    }
+    let d_stress = compare(&a, &b, &stress);
+    eprintln!("per-atom stress: max relative difference {d_stress:e}");
+    assert!(d_stress <= PRINT_PRECISION, "stress/atom: max relative difference {d_stress:e}");
+}
+
 #[test]
 fn mpr_zero_is_stock_hertz_with_primitive_and_mesh_walls() {
     for deck in ["single_particle_plates.in", "bcc_box.in"] {
