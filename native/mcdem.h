@@ -51,6 +51,8 @@ typedef struct mcdem_pair_coeffs {
     double g_star;   /* effective shear modulus [Pa] */
     double beta;     /* ln e / sqrt(ln^2 e + pi^2) */
     double friction; /* Coulomb coefficient */
+    double damping_ratio_t_n; /* sqrt(4 G* / E*), derived; a struct not filled by
+                                 mcdem_pair_coeffs_new is rejected */
 } mcdem_pair_coeffs;
 
 /* Output of the Hertz normal sub-model. */

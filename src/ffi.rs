@@ -108,6 +108,8 @@ pub struct mcdem_pair_coeffs {
     pub g_star: f64,
     pub beta: f64,
     pub friction: f64,
+    /// √(4G*/E*), derived once here so that a contact pays no square root and division for it.
+    pub damping_ratio_t_n: f64,
 }
 
 /// Output of the Hertz normal sub-model.
@@ -160,16 +162,28 @@ fn body(b: &mcdem_body) -> Body {
     Body { x: v3(&b.x), v: v3(&b.v), omega: v3(&b.omega), radius: b.radius, mass: b.mass }
 }
 
-fn coeffs(c: &mcdem_pair_coeffs) -> PairCoeffs {
+fn coeffs(c: &mcdem_pair_coeffs) -> Result<PairCoeffs, FfiError> {
+    // A struct filled by hand rather than by mcdem_pair_coeffs_new lacks the derived ratio, which
+    // would silently remove the tangential damping.
+    if !(c.damping_ratio_t_n > 0.0 && c.damping_ratio_t_n.is_finite()) {
+        return Err(FfiError(
+            MCDEM_ERR_PARAMETER,
+            format!(
+                "pair coefficients not built by mcdem_pair_coeffs_new (damping_ratio_t_n = {:e})",
+                c.damping_ratio_t_n
+            ),
+        ));
+    }
     // The C ABI's pair functions are the history model (the plugin leaves the tangential
     // sub-model to LIGGGHTS).
-    PairCoeffs::from_moduli(
-        c.e_star,
-        c.g_star,
-        c.beta,
-        c.friction,
-        crate::physics::hertz::Tangential::History,
-    )
+    Ok(PairCoeffs {
+        e_star: c.e_star,
+        g_star: c.g_star,
+        beta: c.beta,
+        friction: c.friction,
+        tangential: crate::physics::hertz::Tangential::History,
+        damping_ratio_t_n: c.damping_ratio_t_n,
+    })
 }
 
 fn write_contact(out: &mut mcdem_contact_force, r: Option<ContactForce>) {
@@ -372,7 +386,13 @@ pub unsafe extern "C" fn mcdem_pair_coeffs_new(
         let mi = Material::hertz(youngs_i, poisson_i).map_err(param)?;
         let mj = Material::hertz(youngs_j, poisson_j).map_err(param)?;
         let c = PairCoeffs::new(&mi, &mj, restitution, friction).map_err(param)?;
-        *out = mcdem_pair_coeffs { e_star: c.e_star, g_star: c.g_star, beta: c.beta, friction: c.friction };
+        *out = mcdem_pair_coeffs {
+            e_star: c.e_star,
+            g_star: c.g_star,
+            beta: c.beta,
+            friction: c.friction,
+            damping_ratio_t_n: c.damping_ratio_t_n,
+        };
         Ok(())
     })
 }
@@ -392,7 +412,7 @@ pub unsafe extern "C" fn mcdem_hertz_normal(
     out: *mut mcdem_normal_force,
 ) -> i32 {
     guard(|| {
-        let c = coeffs(non_null(coeffs_, "coeffs")?);
+        let c = coeffs(non_null(coeffs_, "coeffs")?)?;
         let out = non_null_mut(out, "out")?;
         let n = hertz::normal(&c, delta, reff, meff, vn);
         if !(n.force.is_finite() && n.kt.is_finite() && n.gamma_n.is_finite()) {
@@ -430,7 +450,7 @@ pub unsafe extern "C" fn mcdem_particle_particle(
     out: *mut mcdem_contact_force,
 ) -> i32 {
     guard(|| {
-        let c = coeffs(non_null(coeffs_, "coeffs")?);
+        let c = coeffs(non_null(coeffs_, "coeffs")?)?;
         let (bi, bj) = (body(non_null(bi, "bi")?), body(non_null(bj, "bj")?));
         let out = non_null_mut(out, "out")?;
         non_null_mut(shear, "shear")?;
@@ -461,7 +481,7 @@ pub unsafe extern "C" fn mcdem_particle_wall(
     out: *mut mcdem_contact_force,
 ) -> i32 {
     guard(|| {
-        let c = coeffs(non_null(coeffs_, "coeffs")?);
+        let c = coeffs(non_null(coeffs_, "coeffs")?)?;
         let bi = body(non_null(bi, "bi")?);
         let out = non_null_mut(out, "out")?;
         non_null(wall_point, "wall_point")?;

@@ -28,9 +28,12 @@ fn state(advanced: bool) -> Vec<u64> {
 
 /// The multi-contact kernel alone on contact sets of 0 … 23 contacts (every offset of the AVX2
 /// kernel's four-pair chunks), with coincident, antipodal and centred points and unloaded
-/// contacts among them: radius changes, fallback flags and influence matrices, as bits.
+/// contacts among them: radius changes, fallback flags and influence matrices, as bits, and the
+/// radius changes from the influence matrix.
 fn kernel_bits() -> Vec<u64> {
-    use mcdem::physics::contact_set::{influence, radius_changes, ContactLoad, McParams};
+    use mcdem::physics::contact_set::{
+        influence, radius_changes, radius_changes_with, ContactLoad, McParams,
+    };
     use mcdem::physics::ghods2022::{Cap, MprTest};
     use mcdem::physics::Vec3;
     let mut s: u64 = 0x6d63_6465_6d00;
@@ -72,6 +75,17 @@ fn kernel_bits() -> Vec<u64> {
         influence(&p, &cs, &mut g).unwrap();
         out.extend(d.iter().chain(&g).map(|v| v.to_bits()));
         out.extend(fb.iter().map(|&f| u64::from(f)));
+        // The same radius changes from the matrix: exactly n² values (one lane at a time), and
+        // with four values after it (the kept matrices' layout: four lanes when the CPU has AVX2).
+        let (mut dw, mut fbw) = (vec![0.0; n], vec![false; n]);
+        radius_changes_with(&p, &g, &cs, &mut dw, &mut fbw).unwrap();
+        g.extend([0.0; 4]);
+        let (mut dp, mut fbp) = (vec![0.0; n], vec![false; n]);
+        radius_changes_with(&p, &g, &cs, &mut dp, &mut fbp).unwrap();
+        assert!(dw.iter().zip(&dp).all(|(a, b)| a.to_bits() == b.to_bits()), "padded matrix: other bits");
+        assert_eq!(fbw, fbp);
+        out.extend(dw.iter().map(|v| v.to_bits()));
+        out.extend(fbw.iter().map(|&f| u64::from(f)));
     }
     out
 }

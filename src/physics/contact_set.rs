@@ -318,15 +318,15 @@ pub fn radius_changes_with(
         // Unloaded contacts exert nothing: their force enters as 0.
         s.w.clear();
         s.w.extend(contacts.iter().map(|c| if c.force > threshold { c.force } else { 0.0 }));
-        s.peak.clear();
-        s.peak.resize(n, 0.0);
-        let (g, delta) = (&g[..n * n], &mut delta[..n]);
+        s.delta.resize(n + LANES, 0.0);
+        s.peak.resize(n + LANES, 0.0);
+        let delta = &mut delta[..n];
         match p.cap.map(|c| c.test) {
             None => s.apply::<NO_CAP>(g, delta),
             Some(MprTest::Abs) => s.apply::<ABS_CAP>(g, delta),
             Some(MprTest::Signed) => s.apply::<SIGNED_CAP>(g, delta),
         }
-        let fallbacks = finish(p, delta, &mut hertz_fallback[..n], &s.peak)?;
+        let fallbacks = finish(p, delta, &mut hertz_fallback[..n], &s.peak[..n])?;
         Ok(KernelSummary { loaded, fallbacks })
     })
 }
@@ -373,7 +373,10 @@ impl KeptInfluence {
             && contacts.iter().zip(&self.points).all(|(c, q)| (c.point - q).norm_squared() <= lim);
         if !current {
             let n = contacts.len();
-            self.g.resize(n * n, 0.0);
+            // LANES values past the matrix: room for the last chunk of its last row (see
+            // `Scratch::apply`).
+            self.g.clear();
+            self.g.resize(n * n + LANES, 0.0);
             self.params = None;
             influence(p, contacts, &mut self.g)?;
             self.points.clear();
@@ -663,22 +666,48 @@ impl Scratch {
         }
     }
 
-    /// Δ_c = Σ_k g[k·n + c] F_k with the forces in `w`, and the cap's peaks: source by source over
-    /// all targets (contiguous, independent lanes, vectorised); each target still sums its terms
-    /// in increasing source index.
-    #[inline(always)]
+    /// Δ_c = Σ_k g[k·n + c] F_k with the forces in `w`, and the cap's peaks, into `delta` (the
+    /// peaks stay in `peak`). Targets go in chunks of `L::WIDTH` held in registers while the
+    /// sources run down their column in increasing index, so each target sums its terms in that
+    /// order, as [`Scratch::sums`] does. A chunk reads `L::WIDTH` values of a row, past its end
+    /// into the next row (lanes whose results are never read) and, on the last row, into
+    /// [`LANES`] values after the matrix: four lanes at a time only when `g` has them (the kept
+    /// matrices of [`KeptInfluence`] do), one otherwise; both give the same bits.
     fn apply<const CAP: u8>(&mut self, g: &[f64], delta: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if g.len() >= delta.len() * delta.len() + LANES && super::avx2() {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { self.apply_avx2::<CAP>(g, delta) };
+            return;
+        }
+        self.apply_lanes::<f64, CAP>(g, delta);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn apply_avx2<const CAP: u8>(&mut self, g: &[f64], delta: &mut [f64]) {
+        self.apply_lanes::<F64x4, CAP>(g, delta);
+    }
+
+    #[inline(always)]
+    fn apply_lanes<L: Lane, const CAP: u8>(&mut self, g: &[f64], delta: &mut [f64]) {
         let n = delta.len();
-        let peak = &mut self.peak[..n];
-        for (col, &fk) in g.chunks_exact(n).zip(&self.w) {
-            for ((dc, pc), &gk) in delta.iter_mut().zip(peak.iter_mut()).zip(col) {
-                let t = gk * fk;
-                *dc += t;
+        let w = &self.w[..n];
+        let mut c0 = 0;
+        while c0 < n {
+            let (mut acc, mut pk) = (L::splat(0.0), L::splat(0.0));
+            for (k, &wk) in w.iter().enumerate() {
+                let t = L::load(&g[k * n + c0..]) * L::splat(wk);
+                acc = acc + t;
                 if CAP != NO_CAP {
-                    *pc = peak_of::<f64, CAP>(*pc, t);
+                    pk = peak_of::<L, CAP>(pk, t);
                 }
             }
+            acc.store(&mut self.delta[c0..]);
+            pk.store(&mut self.peak[c0..]);
+            c0 += L::WIDTH;
         }
+        delta.copy_from_slice(&self.delta[..n]);
     }
 }
 
