@@ -82,7 +82,9 @@ fn c_program_agrees_with_the_rust_core() {
 
     // Layouts: the C structs are the Rust #[repr(C)] structs.
     assert_eq!(num("sizeof_mc_params") as usize, std::mem::size_of::<mcdem::ffi::mcdem_mc_params>());
+    assert_eq!(num("sizeof_pair_coeffs") as usize, std::mem::size_of::<mcdem::ffi::mcdem_pair_coeffs>());
     assert_eq!(num("sizeof_contact_load") as usize, std::mem::size_of::<ContactLoad>());
+    assert_eq!(num("sizeof_pair_coeffs") as usize, std::mem::size_of::<mcdem::ffi::mcdem_pair_coeffs>());
     assert_eq!(num("sizeof_contact_load") as usize, std::mem::size_of::<mcdem::ffi::mcdem_contact_load>());
     assert_eq!(num("sizeof_body") as usize, std::mem::size_of::<mcdem::ffi::mcdem_body>());
     assert_eq!(num("sizeof_contact_force") as usize, std::mem::size_of::<mcdem::ffi::mcdem_contact_force>());
@@ -159,6 +161,7 @@ fn c_program_agrees_with_the_rust_core() {
         assert!(msg.contains(needle), "{key}: '{msg}' should mention '{needle}'");
     };
     expect("bad_nu", mcdem::ffi::MCDEM_ERR_PARAMETER, "poisson_ratio");
+    expect("hand_coeffs", mcdem::ffi::MCDEM_ERR_PARAMETER, "mcdem_pair_coeffs_new");
     expect("bad_gamma", mcdem::ffi::MCDEM_ERR_PARAMETER, "gamma");
     expect("bad_mpr", mcdem::ffi::MCDEM_ERR_PARAMETER, "mpr");
     expect("bad_cap", mcdem::ffi::MCDEM_ERR_PARAMETER, "cap");

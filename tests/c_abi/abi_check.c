@@ -24,6 +24,10 @@ int main(void) {
     mcdem_normal_force nf;
     rc = mcdem_hertz_normal(&c, 1e-4, 5e-4, 2e-6, -0.01, &nf);
     printf("normal_rc %d\nnormal_force %.17g\nnormal_kt %.17g\n", rc, nf.force, nf.kt);
+    printf("sizeof_pair_coeffs %zu\n", sizeof(mcdem_pair_coeffs));
+    /* Filled by hand, without the derived damping ratio: rejected, not silently undamped. */
+    mcdem_pair_coeffs hand = {c.e_star, c.g_star, c.beta, c.friction, 0.0};
+    print_error("hand_coeffs", mcdem_hertz_normal(&hand, 1e-4, 5e-4, 2e-6, -0.01, &nf));
 
     mcdem_mc_params p = {1e-3, 23.3e3, 0.5, 0.81, 0.11, MCDEM_CAP_ABS};
     mcdem_contact_load cs[3] = {
