@@ -632,33 +632,17 @@ private:
         for (int i = 0; i < nlocal; i++) {
             const mcdem_mc_params &p = params_[type[i]];
             const double f_eps = p.youngs_modulus * radius[i] * radius[i] * 1e-14;
-            for (size_t s = 0; s < sources_.size(); s++) {
+            gather_pair_records(i, f_eps);
+            for (size_t s = 1; s < sources_.size(); s++) {
                 HistoryData &h = sources_[s].history;
                 const int n = h.get_npartners(i);
-                const NeighList *list = sources_[s].wall ? NULL : static_cast<PairGranProxy *>(h.get_ptr())->list;
                 for (int jj = 0; jj < n; jj++) {
                     double *rec = h.get_data_ptr(i, jj);
-                    // A neighbour never close enough to be recorded has no contact surface.
-                    if (rec[0] == 0.0 && rec[1] == 0.0 && (sources_[s].wall ? rec[2] == 0.0 : true)) continue;
+                    // A wall contact never close enough to be recorded has no contact surface.
+                    if (rec[0] == 0.0 && rec[1] == 0.0 && rec[2] == 0.0) continue;
                     double pij[4], pji[4];
-                    if (list) {
-                        // The library's layout: this list entry's r_i', r_j', |F_n|.
-                        const int j = list->firstneigh[i][jj] & NEIGHMASK;
-                        const bool i_first = tag[i] < tag[j];
-                        const double oriented[3] = {i_first ? rec[0] : rec[1], i_first ? rec[1] : rec[0], rec[2]};
-                        h.compute_surfPos(i, jj, x, oriented, pij, pji, f_eps);
-                    } else {
-                        h.compute_surfPos(i, jj, x, rec, pij, pji, f_eps);
-                    }
+                    h.compute_surfPos(i, jj, x, rec, pij, pji, f_eps);
                     pij[3] = pji[3] = h.get_fn(rec);
-                    if (list) {
-                        // add_partner appends: the rows this record fills are the current ends,
-                        // known here so that step 4 needs no search (ghost rows are replaced by the
-                        // forward communication, so a ghost partner is searched there).
-                        const int j = list->firstneigh[i][jj] & NEIGHMASK;
-                        FixContactPropertyAtom *st = sources_[s].store;
-                        pair_rows_.push_back(PairRow(i, jj, st->get_npartners(i), j < nlocal ? st->get_npartners(j) : -1));
-                    }
                     if (h.get_type() == 'm') {
                         // The library's HistoryData names the row by the triangle in the tracker's
                         // jj-th slot, while the record it read is that of the jj-th contact (slots
@@ -720,6 +704,38 @@ private:
         copy_to_pair_records();
     }
 
+    // Step 1 for the pair source (sources_[0]): its records are the contact histories of the
+    // neighbour-list entries, read in place (what HistoryData's accessors do, without a call and a
+    // type switch per record). The contact points still come from the library's compute_surfPos.
+    void gather_pair_records(int i, double f_eps) {
+        McSource &src = sources_[0];
+        HistoryData &h = src.history;
+        FixContactPropertyAtom *st = src.store;
+        const NeighList *list = static_cast<PairGranProxy *>(h.get_ptr())->list;
+        double *hist = list->listgranhistory->firstdouble[i];
+        const int dnum = list->listgranhistory->dnum;
+        const int nlocal = atom->nlocal;
+        const int *tag = atom->tag;
+        for (int jj = 0; jj < list->numneigh[i]; jj++) {
+            const double *rec = &hist[jj * dnum + record_offset_];
+            // A neighbour never close enough to be recorded has no contact surface.
+            if (rec[0] == 0.0 && rec[1] == 0.0) continue;
+            const int j = list->firstneigh[i][jj] & NEIGHMASK;
+            // The library's layout: this list entry's r_i', r_j', |F_n|.
+            const bool i_first = tag[i] < tag[j];
+            const double oriented[3] = {i_first ? rec[0] : rec[1], i_first ? rec[1] : rec[0], rec[2]};
+            double pij[4], pji[4];
+            h.compute_surfPos(i, jj, atom->x, oriented, pij, pji, f_eps);
+            pij[3] = pji[3] = rec[2];
+            // add_partner appends: the rows this record fills are the current ends, known here so
+            // that step 4 needs no search (ghost rows are replaced by the forward communication,
+            // so a ghost partner is searched there).
+            pair_rows_.push_back(PairRow(i, jj, st->get_npartners(i), j < nlocal ? st->get_npartners(j) : -1));
+            st->add_partner(i, tag[j], pij);
+            st->add_partner(j, tag[i], pji);
+        }
+    }
+
     // The pair loop needs, for every neighbour pair (i, j), the radius change of i at j and of j at
     // i: the values the store holds under the partner's ID, or 0 where it holds none. The
     // library's loop searches the store for them twice per neighbour pair and step; here they are
@@ -731,12 +747,13 @@ private:
         HistoryData &h = src.history;
         FixContactPropertyAtom *st = src.store;
         const NeighList *list = static_cast<PairGranProxy *>(h.get_ptr())->list;
+        double **hist = list->listgranhistory->firstdouble;
+        const int dnum = list->listgranhistory->dnum;
         const int nlocal = atom->nlocal;
         const int *tag = atom->tag;
         for (int i = 0; i < nlocal; i++) {
-            const int n = h.get_npartners(i);
-            for (int jj = 0; jj < n; jj++) {
-                double *rec = h.get_data_ptr(i, jj);
+            for (int jj = 0; jj < list->numneigh[i]; jj++) {
+                double *rec = &hist[i][jj * dnum + record_offset_];
                 const int j = list->firstneigh[i][jj] & NEIGHMASK;
                 double dri = 0.0, drj = 0.0;
                 if (j >= nlocal) {
@@ -752,7 +769,8 @@ private:
             const PairRow &r = pair_rows_[k];
             if (r.row_j < 0) continue;
             const int j = list->firstneigh[r.i][r.jj] & NEIGHMASK;
-            write_pair_radius_changes(h.get_data_ptr(r.i, r.jj), tag[r.i] < tag[j], st->contacthistory(r.i, r.row_i)[3],
+            write_pair_radius_changes(&hist[r.i][r.jj * dnum + record_offset_], tag[r.i] < tag[j],
+                                      st->contacthistory(r.i, r.row_i)[3],
                                       st->contacthistory(j, r.row_j)[3]);
         }
     }

@@ -2227,7 +2227,12 @@ impl McCtx<'_> {
                 // The particle's slots are its contacts in order: Δ goes straight into them.
                 let fb = &mut fb_buf[..nl];
                 let res = match kept.as_deref_mut() {
-                    Some(k) => k[i - lo].radius_changes(tolerance, &params, loads, out, fb),
+                    Some(k) => {
+                        if let Some(next) = k.get(i - lo + 1) {
+                            next.prefetch();
+                        }
+                        k[i - lo].radius_changes(tolerance, &params, loads, out, fb)
+                    }
                     None => radius_changes(&params, loads, out, fb).map(|s| (s, false)),
                 };
                 let (summary, recomputed) = res.map_err(|e| StepError {
