@@ -260,7 +260,7 @@ public:
             hsetup->add_history_value("mcdem_radius_hi", "0");
             hsetup->add_history_value("mcdem_fn", "0");
             // This step's radius changes of both partners at this contact (see copy_to_pair_records),
-            // read by the pair loop (McPairLoop) without searching the per-atom store.
+            // read by the pair loop (mc_pair_loop) without searching the per-atom store.
             hsetup->add_history_value("mcdem_dr_lo", "0");
             hsetup->add_history_value("mcdem_dr_hi", "0");
         }
@@ -623,9 +623,9 @@ private:
         const int nlocal = atom->nlocal;
         double **x = atom->x;
         const int *tag = atom->tag;
-        pair_rows_.clear();
         const int *type = atom->type;
         const double *radius = atom->radius;
+        pair_rows_.clear();
 
         // 1. Contact points and previous-step forces of every recorded contact, stored on both
         //    partners of a pair (the library's store keeps one row per partner: point + force).
