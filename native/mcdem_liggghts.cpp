@@ -704,28 +704,41 @@ private:
         copy_to_pair_records();
     }
 
+    // The pair source's records (sources_[0]) in place: the contact history of neighbour-list
+    // entry (i, jj), where HistoryData's accessor would find it, and its partner.
+    struct PairRecords {
+        const NeighList *list;
+        FixContactPropertyAtom *store;
+        double **hist;
+        int dnum, offset;
+        double *at(int i, int jj) const { return &hist[i][jj * dnum + offset]; }
+        int partner(int i, int jj) const { return list->firstneigh[i][jj] & NEIGHMASK; }
+    };
+    PairRecords pair_records() {
+        const NeighList *list = static_cast<PairGranProxy *>(sources_[0].history.get_ptr())->list;
+        PairRecords pr = {list, sources_[0].store, list->listgranhistory->firstdouble, list->listgranhistory->dnum,
+                          record_offset_};
+        return pr;
+    }
+
     // Step 1 for the pair source (sources_[0]): its records are the contact histories of the
     // neighbour-list entries, read in place (what HistoryData's accessors do, without a call and a
     // type switch per record). The contact points still come from the library's compute_surfPos.
     void gather_pair_records(int i, double f_eps) {
-        McSource &src = sources_[0];
-        HistoryData &h = src.history;
-        FixContactPropertyAtom *st = src.store;
-        const NeighList *list = static_cast<PairGranProxy *>(h.get_ptr())->list;
-        double *hist = list->listgranhistory->firstdouble[i];
-        const int dnum = list->listgranhistory->dnum;
+        const PairRecords pr = pair_records();
+        FixContactPropertyAtom *st = pr.store;
         const int nlocal = atom->nlocal;
         const int *tag = atom->tag;
-        for (int jj = 0; jj < list->numneigh[i]; jj++) {
-            const double *rec = &hist[jj * dnum + record_offset_];
+        for (int jj = 0; jj < pr.list->numneigh[i]; jj++) {
+            const double *rec = pr.at(i, jj);
             // A neighbour never close enough to be recorded has no contact surface.
             if (rec[0] == 0.0 && rec[1] == 0.0) continue;
-            const int j = list->firstneigh[i][jj] & NEIGHMASK;
+            const int j = pr.partner(i, jj);
             // The library's layout: this list entry's r_i', r_j', |F_n|.
             const bool i_first = tag[i] < tag[j];
             const double oriented[3] = {i_first ? rec[0] : rec[1], i_first ? rec[1] : rec[0], rec[2]};
             double pij[4], pji[4];
-            h.compute_surfPos(i, jj, atom->x, oriented, pij, pji, f_eps);
+            sources_[0].history.compute_surfPos(i, jj, atom->x, oriented, pij, pji, f_eps);
             pij[3] = pji[3] = rec[2];
             // add_partner appends: the rows this record fills are the current ends, known here so
             // that step 4 needs no search (ghost rows are replaced by the forward communication,
@@ -743,18 +756,14 @@ private:
     // rows the forward communication brought) and kept in the pair's record by atom ID, like its
     // radii, so the loop reads them directly. Same values, so the same forces bit for bit.
     void copy_to_pair_records() {
-        McSource &src = sources_[0];
-        HistoryData &h = src.history;
-        FixContactPropertyAtom *st = src.store;
-        const NeighList *list = static_cast<PairGranProxy *>(h.get_ptr())->list;
-        double **hist = list->listgranhistory->firstdouble;
-        const int dnum = list->listgranhistory->dnum;
+        const PairRecords pr = pair_records();
+        FixContactPropertyAtom *st = pr.store;
         const int nlocal = atom->nlocal;
         const int *tag = atom->tag;
         for (int i = 0; i < nlocal; i++) {
-            for (int jj = 0; jj < list->numneigh[i]; jj++) {
-                double *rec = &hist[i][jj * dnum + record_offset_];
-                const int j = list->firstneigh[i][jj] & NEIGHMASK;
+            for (int jj = 0; jj < pr.list->numneigh[i]; jj++) {
+                double *rec = pr.at(i, jj);
+                const int j = pr.partner(i, jj);
                 double dri = 0.0, drj = 0.0;
                 if (j >= nlocal) {
                     const int ci = st->has_partner(i, tag[j]);
@@ -768,8 +777,8 @@ private:
         for (size_t k = 0; k < pair_rows_.size(); k++) {
             const PairRow &r = pair_rows_[k];
             if (r.row_j < 0) continue;
-            const int j = list->firstneigh[r.i][r.jj] & NEIGHMASK;
-            write_pair_radius_changes(&hist[r.i][r.jj * dnum + record_offset_], tag[r.i] < tag[j],
+            const int j = pr.partner(r.i, r.jj);
+            write_pair_radius_changes(pr.at(r.i, r.jj), tag[r.i] < tag[j],
                                       st->contacthistory(r.i, r.row_i)[3],
                                       st->contacthistory(j, r.row_j)[3]);
         }

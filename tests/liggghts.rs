@@ -114,26 +114,6 @@ fn mpr_zero_is_stock_hertz_in_contact_and_stress_output() {
         deck,
         &[&common[..], &[("law", "1"), ("dump", "stock.dump"), ("contacts", "stock_c.dump")]].concat(),
     );
-    // Largest difference of a column over its largest magnitude, frames and rows aligned.
-    let compare = |a: &[Frame], b: &[Frame], columns: &[usize]| -> f64 {
-        assert_eq!(a.len(), b.len());
-        let mut worst = 0.0_f64;
-        for &c in columns {
-            // A column that is zero throughout (the y components: motion in the x-z plane) must
-            // stay zero: any difference over a zero scale is infinite.
-            let scale = b.iter().flat_map(|f| f.rows.iter().map(move |r| r[c].abs())).fold(0.0, f64::max);
-            for (fa, fb) in a.iter().zip(b) {
-                assert_eq!((fa.step, fa.rows.len()), (fb.step, fb.rows.len()), "frames differ");
-                for (ra, rb) in fa.rows.iter().zip(&fb.rows) {
-                    let d = (ra[c] - rb[c]).abs();
-                    if d > 0.0 {
-                        worst = worst.max(d / scale);
-                    }
-                }
-            }
-        }
-        worst
-    };
     let (a, b) = (read_dump(&tmp.path().join("mc_c.dump")), read_dump(&tmp.path().join("stock_c.dump")));
     assert!(b.iter().filter(|f| !f.rows.is_empty()).count() >= 5, "too few frames with a contact");
     assert_eq!(b[0].columns.len(), 14);
@@ -141,7 +121,7 @@ fn mpr_zero_is_stock_hertz_in_contact_and_stress_output() {
     for c in [9, 11] {
         assert!(b.iter().any(|f| f.rows.iter().any(|r| r[c] != 0.0)), "no contact force in the dump");
     }
-    let d_local = compare(&a, &b, &(0..14).collect::<Vec<_>>());
+    let d_local = frames::frame_difference(&a, &b, &(0..14).collect::<Vec<_>>());
     eprintln!("contacts: max relative difference {d_local:e}");
     assert!(d_local <= 1e-5, "dump local: max relative difference {d_local:e}");
     let (a, b) = (read_dump(&tmp.path().join("mc.dump")), read_dump(&tmp.path().join("stock.dump")));
@@ -156,7 +136,7 @@ fn mpr_zero_is_stock_hertz_in_contact_and_stress_output() {
             b[0].columns[c]
         );
     }
-    let d_stress = compare(&a, &b, &stress);
+    let d_stress = frames::frame_difference(&a, &b, &stress);
     eprintln!("per-atom stress: max relative difference {d_stress:e}");
     assert!(d_stress <= PRINT_PRECISION, "stress/atom: max relative difference {d_stress:e}");
 }

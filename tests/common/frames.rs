@@ -116,3 +116,25 @@ pub fn trajectory_difference(a: &Path, b: &Path) -> Vec<(&'static str, f64)> {
     }
     out.into_iter().map(|(n, d, s)| (n, if s > 0.0 { d / s } else { 0.0 })).collect()
 }
+
+/// Largest difference between two runs' frames over `columns` (frames parsed by
+/// `mcdem::outputs::read_dump`, e.g. `dump local`), each column's differences relative to its
+/// largest magnitude in `b`. The frames must match in step and row count. A column that is zero
+/// throughout in `b` must stay zero: any difference over a zero scale is infinite.
+pub fn frame_difference(a: &[mcdem::outputs::Frame], b: &[mcdem::outputs::Frame], columns: &[usize]) -> f64 {
+    assert_eq!(a.len(), b.len(), "frame counts differ");
+    let mut worst = 0.0_f64;
+    for &c in columns {
+        let scale = b.iter().flat_map(|f| f.rows.iter().map(move |r| r[c].abs())).fold(0.0, f64::max);
+        for (fa, fb) in a.iter().zip(b) {
+            assert_eq!((fa.step, fa.rows.len()), (fb.step, fb.rows.len()), "frames differ");
+            for (ra, rb) in fa.rows.iter().zip(&fb.rows) {
+                let d = (ra[c] - rb[c]).abs();
+                if d > 0.0 {
+                    worst = worst.max(d / scale);
+                }
+            }
+        }
+    }
+    worst
+}
