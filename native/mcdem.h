@@ -128,6 +128,49 @@ int32_t mcdem_particle_particle(const mcdem_pair_coeffs *coeffs, const mcdem_bod
                                 const mcdem_body *bj, double dri, double drj, double dt,
                                 double *shear, mcdem_contact_force *out);
 
+/* MCDEM_ERR_OVERLAP (message: where the contact law ends) when overlap [m] reached rmin [m], the
+ * smaller original radius of the two bodies (the particle's own for a wall); else MCDEM_OK. */
+int32_t mcdem_check_overlap(double overlap, double rmin);
+
+/* A batch of overlapping particle pairs, one pair per lane, in structure-of-arrays form: the
+ * library's own layout (64-byte aligned; check sizeof against mcdem_pair_batch_size() once). Fill
+ * the inputs of lanes 0..used-1 and call mcdem_pair_batch_evaluate; tangential model `history`. */
+#define MCDEM_BATCH_LANES 8
+typedef struct mcdem_pair_batch {
+    /* inputs */
+    __attribute__((aligned(64))) double d[3][MCDEM_BATCH_LANES]; /* x_i - x_j [m] */
+    double vr[3][MCDEM_BATCH_LANES];      /* v_i - v_j [m/s] */
+    double omega_i[3][MCDEM_BATCH_LANES]; /* [rad/s] */
+    double omega_j[3][MCDEM_BATCH_LANES];
+    double radius_i[MCDEM_BATCH_LANES];   /* original radii [m] */
+    double radius_j[MCDEM_BATCH_LANES];
+    double dri[MCDEM_BATCH_LANES];        /* multi-contact radius changes [m] */
+    double drj[MCDEM_BATCH_LANES];
+    double mass_i[MCDEM_BATCH_LANES];     /* [kg] */
+    double mass_j[MCDEM_BATCH_LANES];
+    /* the pair's mcdem_pair_coeffs, field by field */
+    double e_star[MCDEM_BATCH_LANES];
+    double g_star[MCDEM_BATCH_LANES];
+    double beta[MCDEM_BATCH_LANES];
+    double friction[MCDEM_BATCH_LANES];
+    double damping_ratio_t_n[MCDEM_BATCH_LANES];
+    double shear[3][MCDEM_BATCH_LANES];   /* tangential history [m], updated in place */
+    /* outputs */
+    double force[3][MCDEM_BATCH_LANES];    /* force on i [N]; on j it is the negative */
+    double torque_i[3][MCDEM_BATCH_LANES]; /* [N m] */
+    double torque_j[3][MCDEM_BATCH_LANES]; /* [N m] */
+    double fnorm[MCDEM_BATCH_LANES];       /* |force . n| [N] */
+    double normal[MCDEM_BATCH_LANES];      /* signed normal force k_n delta - gamma_n v_n [N] */
+    uint8_t ok[MCDEM_BATCH_LANES];         /* 1: integrated; 0: ask mcdem_particle_particle why not */
+} mcdem_pair_batch;
+
+/* sizeof(mcdem_pair_batch) as the library lays it out. */
+size_t mcdem_pair_batch_size(void);
+
+/* Lanes 0..used-1 (1 <= used <= MCDEM_BATCH_LANES) of a batch: for each, what
+ * mcdem_particle_particle gives for that pair, bit for bit (its point and overlap aside). */
+int32_t mcdem_pair_batch_evaluate(mcdem_pair_batch *batch, size_t used, double dt);
+
 /* Particle-wall force; wall_point[3] is the closest wall point, wall_velocity[3] its velocity. */
 int32_t mcdem_particle_wall(const mcdem_pair_coeffs *coeffs, const mcdem_body *bi,
                             const double *wall_point, const double *wall_velocity, double dri,

@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <string>
@@ -315,6 +316,9 @@ public:
         if (force->newton_pair)
             error->all(FLERR, "model mc_advanced needs `newton off` (per-contact data are stored on both partners)");
         neighbor->register_contact_dist_factor(kContactDistanceFactor);
+        if (mcdem_pair_batch_size() != sizeof(mcdem_pair_batch))
+            error->all(FLERR, "model mc_advanced: native/mcdem.h and the mcdem library disagree on the size of "
+                              "mcdem_pair_batch (rebuild both from one checkout)");
         // Walls must see the same radius changes as pairs: give every granular wall its store now,
         // during the pair's init, so that the fixes created here are initialised with the others.
         const int nwalls = modify->n_fixes_style("wall/gran");
@@ -367,11 +371,21 @@ public:
         // Radii shrunk by the multi-contact correction can leave a geometric touch with no
         // effective overlap (or no positive effective radius): that contact carries no force.
         const double deltan = reff > 0.0 ? sidata.deltan : 0.0;
+        // The overlap must stay below the smaller original radius (what the batched path and
+        // `mcdem run` stop on too): beyond it the particles pass through each other.
+        const double *radius = atom->radius;
+        const double rmin = sidata.is_wall ? radius[sidata.i] : std::min(radius[sidata.i], radius[sidata.j]);
         mcdem_normal_force nf;
-        if (mcdem_hertz_normal(&coeffs_[it][jt], deltan, reff, sidata.meff, sidata.vn, &nf) != MCDEM_OK) {
-            char msg[700];
-            std::snprintf(msg, sizeof(msg), "model mc_advanced: particle %d, step " BIGINT_FORMAT ": %s",
-                          atom->tag[sidata.i], update->ntimestep, last_mcdem_error().c_str());
+        if (mcdem_check_overlap(sidata.deltan, rmin) != MCDEM_OK ||
+            mcdem_hertz_normal(&coeffs_[it][jt], deltan, reff, sidata.meff, sidata.vn, &nf) != MCDEM_OK) {
+            char who[64];
+            if (sidata.is_wall)
+                std::snprintf(who, sizeof(who), "particle %d at a wall", atom->tag[sidata.i]);
+            else
+                std::snprintf(who, sizeof(who), "particles %d and %d", atom->tag[sidata.i], atom->tag[sidata.j]);
+            char msg[800];
+            std::snprintf(msg, sizeof(msg), "model mc_advanced: %s, step " BIGINT_FORMAT ": %s", who,
+                          update->ntimestep, last_mcdem_error().c_str());
             error->one(FLERR, msg);
         }
         double fn = nf.force;
@@ -425,6 +439,15 @@ public:
         rec[1] = i_first ? radj : radi;
         rec[2] = fn;
     }
+
+    // Whether the pair loop may hand this model's overlapping pairs to the core in batches
+    // (mcdem_pair_batch): the batch computes the contact of the default settings (both partners'
+    // modified radii, tangential damping on, no limitForce) in SI units, where k_n, k_t need no
+    // conversion. Any other setting keeps the one-contact path.
+    bool batch_eligible() const {
+        return !stock_pair_radii_ && !limit_force_ && tangential_damping_ && force->nktv2p == 1.0;
+    }
+    const mcdem_pair_coeffs &pair_coeffs(int it, int jt) const { return coeffs_[it][jt]; }
 
     // i's multi-contact-modified radius at this contact. LIGGGHTS's pair loop grows radj and the
     // radius sum but leaves radi at the original radius (its walls grow radi). SPEC §2 uses the
@@ -856,6 +879,198 @@ std::map<LAMMPS *, NormalModel<MC_ADVANCED> *> NormalModel<MC_ADVANCED>::pair_mo
 }  // namespace ContactModels
 }  // namespace LIGGGHTS
 
+namespace {
+
+typedef ContactModel<GranStyle<MC_ADVANCED, TANGENTIAL_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT> >
+    McHistoryModel;
+typedef ContactModel<GranStyle<MC_ADVANCED, TANGENTIAL_NO_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT> >
+    McNoHistoryModel;
+typedef TangentialModel<TANGENTIAL_HISTORY> HistoryTangential;
+
+// The batched pair path needs the sub-models of the `tangential history` combination, which
+// ContactModel keeps private, and the tangential model's history offset and energy options (the
+// batch computes none of them): the private-access idiom above, checked by the compiler.
+struct McNormalTag {
+    typedef NormalModel<MC_ADVANCED> McHistoryModel::*type;
+    friend type private_member(McNormalTag);
+};
+template struct PrivateAccess<McNormalTag, &McHistoryModel::normalModel>;
+struct McTangentialTag {
+    typedef HistoryTangential McHistoryModel::*type;
+    friend type private_member(McTangentialTag);
+};
+template struct PrivateAccess<McTangentialTag, &McHistoryModel::tangentialModel>;
+struct ShearOffsetTag {
+    typedef int HistoryTangential::*type;
+    friend type private_member(ShearOffsetTag);
+};
+template struct PrivateAccess<ShearOffsetTag, &HistoryTangential::history_offset>;
+template <int K>
+struct TangentialFlagTag {
+    typedef bool HistoryTangential::*type;
+    friend type private_member(TangentialFlagTag);
+};
+template struct PrivateAccess<TangentialFlagTag<0>, &HistoryTangential::heating>;
+template struct PrivateAccess<TangentialFlagTag<1>, &HistoryTangential::heating_track>;
+template struct PrivateAccess<TangentialFlagTag<2>, &HistoryTangential::elasticpotflag_>;
+template struct PrivateAccess<TangentialFlagTag<3>, &HistoryTangential::dissipatedflag_>;
+
+// The pair batch of one force pass: overlapping pairs gathered lane by lane into the core's
+// mcdem_pair_batch, evaluated eight at a time by mcdem_pair_batch_evaluate (the same contact as the
+// one-contact path: Hertz normal force on the modified radii, damping, history tangential force),
+// and their forces, torques, tangential histories and records written back. Used where the batch
+// computes exactly what the sub-models would (see McBatch::open); every other pair takes the
+// one-contact path.
+class McBatch {
+public:
+    McBatch() : model_(NULL), used_(0) { std::memset(&b_, 0, sizeof(b_)); }
+
+    // Ready for a pass of the history model when its settings and the pass's outputs allow it.
+    bool open(LAMMPS *lmp, McHistoryModel &cmodel, PairGran *pg, bool extra_outputs) {
+        HistoryTangential &tm = cmodel.*private_member(McTangentialTag());
+        const NormalModel<MC_ADVANCED> &nm = cmodel.*private_member(McNormalTag());
+        if (extra_outputs || !nm.batch_eligible() || tm.*private_member(TangentialFlagTag<0>()) ||
+            tm.*private_member(TangentialFlagTag<1>()) || tm.*private_member(TangentialFlagTag<2>()) ||
+            tm.*private_member(TangentialFlagTag<3>()) || !lmp->atom->sphere_flag || !lmp->atom->rmass ||
+            pg->fr_pair() || !pg->computeflag() || !pg->shearupdate() || !pg->listgranhistory ||
+            !pg->storeSumDelta())
+            return false;
+        lmp_ = lmp;
+        pg_ = pg;
+        model_ = &nm;
+        shear_ = tm.*private_member(ShearOffsetTag());
+        record_ = cmodel.get_history_offset(kRecordName);
+        dnum_ = pg->dnum();
+        dt_ = lmp->update->dt;
+        return true;
+    }
+    bool active() const { return model_ != NULL; }
+
+    // Neighbour entry jj of i (partner j, centre difference del, modified radii radi, radj) into
+    // the next lane.
+    void push(int i, int j, int jj, const double *del, double radi, double radj) {
+        const Atom *atom = lmp_->atom;
+        const int l = used_;
+        double **v = atom->v, **omega = atom->omega;
+        const double *hist = &pg_->listgranhistory->firstdouble[i][dnum_ * jj + shear_];
+        for (int k = 0; k < 3; k++) {
+            b_.d[k][l] = del[k];
+            b_.vr[k][l] = v[i][k] - v[j][k];
+            b_.omega_i[k][l] = omega[i][k];
+            b_.omega_j[k][l] = omega[j][k];
+            b_.shear[k][l] = hist[k];
+        }
+        b_.radius_i[l] = atom->radius[i];
+        b_.radius_j[l] = atom->radius[j];
+        b_.dri[l] = radi - atom->radius[i];
+        b_.drj[l] = radj - atom->radius[j];
+        b_.mass_i[l] = atom->rmass[i];
+        b_.mass_j[l] = atom->rmass[j];
+        const mcdem_pair_coeffs &c = model_->pair_coeffs(atom->type[i], atom->type[j]);
+        b_.e_star[l] = c.e_star;
+        b_.g_star[l] = c.g_star;
+        b_.beta[l] = c.beta;
+        b_.friction[l] = c.friction;
+        b_.damping_ratio_t_n[l] = c.damping_ratio_t_n;
+        i_[l] = i;
+        j_[l] = j;
+        jj_[l] = jj;
+        radi_[l] = radi;
+        radj_[l] = radj;
+        if (++used_ == MCDEM_BATCH_LANES) flush();
+    }
+
+    // Evaluates the lanes filled so far and writes their results where the sub-models would.
+    void flush() {
+        if (!used_) return;
+        if (mcdem_pair_batch_evaluate(&b_, static_cast<size_t>(used_), dt_) != MCDEM_OK)
+            lmp_->error->one(FLERR, ("model mc_advanced: " + last_mcdem_error()).c_str());
+        Atom *atom = lmp_->atom;
+        double **f = atom->f, **torque = atom->torque;
+        const int nlocal = atom->nlocal;
+        const bool newton_pair = lmp_->force->newton_pair;
+        int **flags = pg_->listgranhistory->firstneigh;
+        for (int l = 0; l < used_; l++) {
+            if (!b_.ok[l]) fail(l);
+            const int i = i_[l], j = j_[l];
+            double *hist = &pg_->listgranhistory->firstdouble[i][dnum_ * jj_[l]];
+            for (int k = 0; k < 3; k++) hist[shear_ + k] = b_.shear[k][l];
+            if (flags) flags[i][jj_[l]] |= CONTACT_NORMAL_MODEL | CONTACT_TANGENTIAL_MODEL;
+            model_->write_pair_record(&hist[record_], i, j, radi_[l], radj_[l], std::fabs(b_.normal[l]));
+            const double F[3] = {b_.force[0][l], b_.force[1][l], b_.force[2][l]};
+            const double relax_i = pg_->relax(i);
+            for (int k = 0; k < 3; k++) {
+                f[i][k] += relax_i * F[k];
+                torque[i][k] += relax_i * b_.torque_i[k][l];
+            }
+            if (newton_pair || j < nlocal) {
+                const double relax_j = pg_->relax(j);
+                for (int k = 0; k < 3; k++) {
+                    f[j][k] += relax_j * -F[k];
+                    torque[j][k] += relax_j * b_.torque_j[k][l];
+                }
+            }
+            if (pg_->evflag)
+                pg_->ev_tally_xyz(i, j, nlocal, newton_pair, 0.0, 0.0, F[0], F[1], F[2], b_.d[0][l], b_.d[1][l],
+                                  b_.d[2][l]);
+        }
+        used_ = 0;
+    }
+
+private:
+    // Stops the run at a lane the core could not integrate, with the core's reason for that pair.
+    void fail(int l) const {
+        mcdem_body bi, bj;
+        for (int k = 0; k < 3; k++) {
+            bi.x[k] = b_.d[k][l];
+            bj.x[k] = 0.0;
+            bi.v[k] = b_.vr[k][l];
+            bj.v[k] = 0.0;
+            bi.omega[k] = b_.omega_i[k][l];
+            bj.omega[k] = b_.omega_j[k][l];
+        }
+        bi.radius = b_.radius_i[l];
+        bj.radius = b_.radius_j[l];
+        bi.mass = b_.mass_i[l];
+        bj.mass = b_.mass_j[l];
+        const double *hist = &pg_->listgranhistory->firstdouble[i_[l]][dnum_ * jj_[l] + shear_];
+        double shear[3] = {hist[0], hist[1], hist[2]};
+        mcdem_contact_force out;
+        const Atom *atom = lmp_->atom;
+        const std::string why =
+            mcdem_particle_particle(&model_->pair_coeffs(atom->type[i_[l]], atom->type[j_[l]]), &bi, &bj, b_.dri[l],
+                                    b_.drj[l], dt_, shear, &out) != MCDEM_OK
+                ? last_mcdem_error()
+                : std::string("contact force not finite");
+        char msg[800];
+        std::snprintf(msg, sizeof(msg), "model mc_advanced: particles %d and %d, step " BIGINT_FORMAT ": %s",
+                      atom->tag[i_[l]], atom->tag[j_[l]], lmp_->update->ntimestep, why.c_str());
+        lmp_->error->one(FLERR, msg);
+    }
+
+    mcdem_pair_batch b_;
+    LAMMPS *lmp_;
+    PairGran *pg_;
+    const NormalModel<MC_ADVANCED> *model_;
+    int shear_, record_, dnum_;
+    double dt_;
+    int used_;
+    int i_[MCDEM_BATCH_LANES], j_[MCDEM_BATCH_LANES], jj_[MCDEM_BATCH_LANES];
+    double radi_[MCDEM_BATCH_LANES], radj_[MCDEM_BATCH_LANES];
+};
+
+// The batch serves the `tangential history` combination; `no_history` keeps the one-contact path.
+template <typename Model>
+bool open_batch(McBatch &, LAMMPS *, Model &, PairGran *, bool) {
+    return false;
+}
+template <>
+bool open_batch(McBatch &batch, LAMMPS *lmp, McHistoryModel &cmodel, PairGran *pg, bool extra_outputs) {
+    return batch.open(lmp, cmodel, pg, extra_outputs);
+}
+
+}  // namespace
+
 namespace LIGGGHTS {
 namespace PairStyles {
 
@@ -926,6 +1141,12 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
     sidata.computeflag = pg->computeflag();
     sidata.shearupdate = pg->shearupdate();
     cmodel.beginPass(sidata, i_forces, j_forces);
+    // Overlapping pairs go to the core in batches unless an output needs the sub-models' per-pair
+    // data (pair/gran/local, stored contact forces, summed normal forces, inserted histories).
+    McBatch batch;
+    const bool batched = open_batch(batch, lmp, cmodel, pg,
+                                    pair_local || store_forces || store_stress || pg->store_sum_normal_force() ||
+                                        !inserters.empty());
 
     for (int ii = 0; ii < list->inum; ii++) {
         const int i = list->ilist[ii];
@@ -949,6 +1170,10 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
                 radj += r[i_first ? kPairDrHi : kPairDrLo];
             }
             const double radsum = radi + radj;
+            if (batched && rsq < radsum * radsum && !((mask[i] | mask[j]) & freeze_bit)) {
+                batch.push(i, j, jj, del, radi, radj);
+                continue;
+            }
             sidata.radj = radj;
             sidata.radsum = radsum;
             sidata.j = j;
@@ -1021,16 +1246,12 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
         }
     }
 
+    if (batched) batch.flush();
     cmodel.endPass(sidata, i_forces, j_forces);
     if (pair_local) pg->cpl_pair_finalize();
     if (pg->storeContactForces()) pg->fix_contact_forces()->do_forward_comm();
     if (store_stress) pg->fix_contact_forces_stress()->do_forward_comm();
 }
-
-typedef ContactModel<GranStyle<MC_ADVANCED, TANGENTIAL_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT> >
-    McHistoryModel;
-typedef ContactModel<GranStyle<MC_ADVANCED, TANGENTIAL_NO_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT> >
-    McNoHistoryModel;
 
 template <>
 void Granular<McHistoryModel>::compute_force(PairGran *pg, int eflag, int vflag, int addflag) {
@@ -1083,6 +1304,11 @@ Registrar registrar;
 // with mc_advanced registered. Referencing this function from the executable also keeps the
 // registrar's object file in the link.
 extern "C" int mcdem_liggghts_main(int argc, char **argv) {
+    // A run stopped by one rank (error->one: a contact out of range) ends in MPI_Abort, which
+    // discards what stdio still buffers; with stdout going to a file or pipe the ERROR line itself
+    // would be lost. Line buffering writes each line as it is completed (the screen output is a
+    // few lines per thousand steps, so this costs nothing measurable).
+    std::setvbuf(stdout, NULL, _IOLBF, 0);
     MPI_Init(&argc, &argv);
     LAMMPS_NS::LAMMPS *lmp = new LAMMPS_NS::LAMMPS(argc, argv, MPI_COMM_WORLD);
     lmp->input->file();

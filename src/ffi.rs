@@ -15,7 +15,7 @@ use crate::physics::contact_set::{
 use crate::physics::ghods2022::{Cap, MprTest};
 use crate::physics::hertz;
 use crate::physics::material::{check_poisson_ratio, check_youngs_modulus, Material, PairCoeffs};
-use crate::physics::pair::{self, Body, ContactError, ContactForce, WallPoint};
+use crate::physics::pair::{self, Body, ContactError, ContactForce, PairLanes, WallPoint};
 use crate::physics::Vec3;
 
 pub const MCDEM_OK: i32 = 0;
@@ -460,6 +460,66 @@ pub unsafe extern "C" fn mcdem_particle_particle(
         let r = pair::particle_particle(&c, &bi, &bj, dri, drj, dt, &mut s).map_err(contact_err)?;
         sh.copy_from_slice(s.as_slice());
         write_contact(out, r);
+        Ok(())
+    })
+}
+
+/// The range check of the contact law for callers that compute the overlap themselves (the LIGGGHTS
+/// shim's one-contact path): `MCDEM_ERR_OVERLAP` with the core's message when `overlap` [m] reached
+/// `rmin` [m], the smaller original radius of the two bodies (the particle's own for a wall).
+#[no_mangle]
+pub extern "C" fn mcdem_check_overlap(overlap: f64, rmin: f64) -> i32 {
+    guard(|| pair::overlap_error(overlap, rmin).map_or(Ok(()), |e| Err(contact_err(e))))
+}
+
+/// Size in bytes of `mcdem_pair_batch` as this library lays it out (the C header declares the same
+/// fields; callers check the two agree before the first batch).
+#[no_mangle]
+pub extern "C" fn mcdem_pair_batch_size() -> usize {
+    std::mem::size_of::<PairLanes>()
+}
+
+/// Evaluates lanes `0..used` of a batch of overlapping particle pairs (`mcdem_pair_batch`, the
+/// core's [`PairLanes`]): the same contact as [`mcdem_particle_particle`] lane by lane, bit for bit,
+/// four lanes per instruction where the CPU has AVX2. Lanes `used..` are overwritten with copies of
+/// lane 0. A lane whose `ok` comes out 0 cannot be integrated (overlap reached a radius, coincident
+/// centres, or a non-finite result): the caller asks `mcdem_particle_particle` for the reason.
+/// # Safety
+/// `batch` must be null (rejected with `MCDEM_ERR_NULL`) or point to a writable, 64-byte aligned
+/// `mcdem_pair_batch`.
+#[no_mangle]
+pub unsafe extern "C" fn mcdem_pair_batch_evaluate(batch: *mut PairLanes, used: usize, dt: f64) -> i32 {
+    guard(|| {
+        if batch.is_null() {
+            return Err(FfiError(MCDEM_ERR_NULL, "batch is a null pointer".into()));
+        }
+        if batch as usize % std::mem::align_of::<PairLanes>() != 0 {
+            return Err(FfiError(MCDEM_ERR_PARAMETER, "batch is not 64-byte aligned".into()));
+        }
+        // SAFETY: non-null and aligned; `ok` is an output whose bytes the caller may have left
+        // uninitialised, so it is given valid booleans before the struct is borrowed.
+        let b = unsafe {
+            std::ptr::addr_of_mut!((*batch).ok).write([false; pair::LANES]);
+            &mut *batch
+        };
+        if used == 0 || used > pair::LANES {
+            return Err(FfiError(
+                MCDEM_ERR_PARAMETER,
+                format!("batch lanes used = {used}, must be 1 to {}", pair::LANES),
+            ));
+        }
+        // A lane without the derived damping ratio was not filled from mcdem_pair_coeffs_new.
+        if let Some(l) = (0..used).find(|&l| !(b.coeffs.damping_ratio_t_n[l] > 0.0)) {
+            return Err(FfiError(
+                MCDEM_ERR_PARAMETER,
+                format!(
+                    "batch lane {l}: pair coefficients not built by mcdem_pair_coeffs_new (damping_ratio_t_n = {:e})",
+                    b.coeffs.damping_ratio_t_n[l]
+                ),
+            ));
+        }
+        b.pad_from_first(used);
+        b.evaluate(dt);
         Ok(())
     })
 }

@@ -154,6 +154,15 @@ fn c_program_agrees_with_the_rust_core() {
     assert_eq!(num("wall_rc"), 0.0);
     assert_eq!(num("wall_force_z"), fw.force_i.z);
 
+    // The pair batch: the library's layout, each lane the one-pair contact bit for bit (checked in
+    // C, where the lanes are filled), the deep lane flagged instead of integrated.
+    assert_eq!(num("sizeof_pair_batch") as usize, std::mem::size_of::<mcdem::physics::pair::PairLanes>());
+    assert_eq!(num("lib_pair_batch"), num("sizeof_pair_batch"));
+    assert_eq!(num("batch_rc"), 0.0);
+    assert_eq!(v["batch_ok"], "1 1 0");
+    assert_eq!(num("batch_mismatch"), 0.0);
+    assert!(num("batch_normal0") > 0.0, "lane 0 is a loaded contact");
+
     // Error paths: codes from the header, messages that name the problem.
     let expect = |key: &str, code: i32, needle: &str| {
         assert_eq!(num(&format!("{key}_code")) as i32, code, "{key}");
@@ -167,4 +176,6 @@ fn c_program_agrees_with_the_rust_core() {
     expect("bad_cap", mcdem::ffi::MCDEM_ERR_PARAMETER, "cap");
     expect("null", mcdem::ffi::MCDEM_ERR_NULL, "contacts");
     expect("deep", mcdem::ffi::MCDEM_ERR_OVERLAP, "radius");
+    expect("batch_empty", mcdem::ffi::MCDEM_ERR_PARAMETER, "lanes used = 0");
+    expect("batch_hand", mcdem::ffi::MCDEM_ERR_PARAMETER, "mcdem_pair_coeffs_new");
 }

@@ -274,6 +274,24 @@ fn three_sphere_stack_runs_where_stock_multicontact_aborts() {
     }
 }
 
+/// A run driven beyond the contact law's range (the hydrogel piston at 10 m/s, 100 times the
+/// example's speed: particles are pushed through each other within 200 steps) stops at the first
+/// overlap that reaches a particle radius, with one ERROR line naming both particles and the step,
+/// in the batched pair path (default) and in the one-contact path (`pairRadii stock`) alike; it
+/// never runs on with interpenetrating particles or NaN.
+#[test]
+fn overlap_beyond_the_radius_stops_the_run_naming_the_particles() {
+    let tmp = TempDir::new().unwrap();
+    for radii in ["modified", "stock"] {
+        let vars = vec![("stroke", "300"), ("strokes", "1"), ("pairradii", radii)];
+        expect_error(
+            ("hydrogel.in", vars),
+            tmp.path(),
+            &["model mc_advanced: particles ", " and ", "step ", "reached the particle radius"],
+        );
+    }
+}
+
 /// A copy of the two-particle deck edited by `edit`, written into `dir`.
 fn edited_deck(dir: &Path, edit: impl Fn(&str) -> String) -> String {
     let text = std::fs::read_to_string(decks().join("two_particles.in")).unwrap();
@@ -399,7 +417,7 @@ fn hydrogel_piston_force_matches_stock_multicontact_when_cap_never_trips() {
 #[test]
 fn hydrogel_deck_writes_the_state_after_a_stroke() {
     let tmp = TempDir::new().unwrap();
-    let vars = [("stroke", "300"), ("strokes", "2"), ("statestroke", "1"), ("statefile", "state.dump")];
+    let vars = [("stroke", "3000"), ("strokes", "1"), ("statestroke", "1"), ("statefile", "state.dump")];
     run_ok(tmp.path(), "hydrogel.in", &vars);
     let frames = read_dump(&tmp.path().join("state.dump"));
     assert_eq!(frames.len(), 1);

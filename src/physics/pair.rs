@@ -235,10 +235,18 @@ fn wall_geometry(d: Vec3, r: f64, ri: f64, point: Vec3, vr: Vec3, omega: Vec3, m
 #[inline(always)]
 fn pair_error(d: Vec3, radsum: f64, rmin: f64) -> Option<ContactError> {
     let r = d.norm_squared().sqrt();
-    let overlap = radsum - r;
     if r == 0.0 {
         Some(ContactError::CoincidentCentres)
-    } else if overlap >= rmin {
+    } else {
+        overlap_error(radsum - r, rmin)
+    }
+}
+
+/// The range of the contact law: an overlap that reached the smaller original radius `rmin` of the
+/// bodies (the particle's own for a wall) means the particles are passing through each other.
+#[inline(always)]
+pub fn overlap_error(overlap: f64, rmin: f64) -> Option<ContactError> {
+    if overlap >= rmin {
         Some(ContactError::OverlapBeyondRadius { overlap, radius: rmin })
     } else {
         None
@@ -283,6 +291,8 @@ pub struct PairLanes {
     pub torque_i: [[f64; LANES]; 3],
     pub torque_j: [[f64; LANES]; 3],
     pub fnorm: [f64; LANES],
+    /// Signed normal force F_n = k_n δ − γ_n v_n [N] (what LIGGGHTS's normal sub-model gives).
+    pub normal: [f64; LANES],
     pub ok: [bool; LANES],
 }
 
@@ -440,6 +450,7 @@ impl Batch for PairLanes {
             set_lane3(&mut self.torque_j, l, &cf.torque_j);
             set_lane3(&mut self.shear, l, &shear);
             self.fnorm[l] = cf.force_i.dot(&cf.en).abs();
+            self.normal[l] = cf.normal.force;
         }
     }
 }
@@ -467,10 +478,7 @@ pub fn particle_wall(
     if r == 0.0 {
         return Err(ContactError::CoincidentCentres);
     }
-    let overlap = ri - r;
-    if overlap >= bi.radius {
-        return Err(ContactError::OverlapBeyondRadius { overlap, radius: bi.radius });
-    }
+    overlap_error(ri - r, bi.radius).map_or(Ok(()), Err)?;
     let g = wall_geometry(d, r, ri, wall.point, bi.v - wall.velocity, bi.omega, bi.mass);
     let cf = forces(c, &g, dt, shear);
     if finite(&cf) {

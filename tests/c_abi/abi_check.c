@@ -53,6 +53,61 @@ int main(void) {
     rc = mcdem_particle_wall(&c, &bw, wp, wv, 0.0, 1e-5, sw, &f);
     printf("wall_rc %d\nwall_force_z %.17g\n", rc, f.force_i[2]);
 
+    /* The pair batch: lane l is the pair above with its own offsets, and must equal the one-pair
+     * call bit for bit; lane 2 overlaps beyond a radius and is flagged, not integrated. */
+    printf("sizeof_pair_batch %zu\nlib_pair_batch %zu\n", sizeof(mcdem_pair_batch), mcdem_pair_batch_size());
+    static mcdem_pair_batch b; /* static: 64-byte aligned storage without a C11 allocator */
+    memset(&b, 0xff, sizeof b);
+    const int lanes = 3;
+    for (int l = 0; l < lanes; l++) {
+        const double zi = l == 2 ? 0.5e-3 : 1.9e-3 - 0.05e-3 * l;
+        for (int k = 0; k < 3; k++) {
+            b.d[k][l] = (k == 2 ? zi : 0.01e-3 * l) - bj.x[k];
+            b.vr[k][l] = bi.v[k] * (1.0 + l) - bj.v[k];
+            b.omega_i[k][l] = bi.omega[k];
+            b.omega_j[k][l] = bj.omega[k] - l;
+            b.shear[k][l] = 1e-6 * (k + l);
+        }
+        b.radius_i[l] = bi.radius;
+        b.radius_j[l] = bj.radius;
+        b.dri[l] = 1e-5;
+        b.drj[l] = -1e-5 * l;
+        b.mass_i[l] = bi.mass;
+        b.mass_j[l] = bj.mass;
+        b.e_star[l] = c.e_star;
+        b.g_star[l] = c.g_star;
+        b.beta[l] = c.beta;
+        b.friction[l] = l == 1 ? 0.0 : 0.5;
+        b.damping_ratio_t_n[l] = c.damping_ratio_t_n;
+    }
+    rc = mcdem_pair_batch_evaluate(&b, lanes, 1e-5);
+    printf("batch_rc %d\nbatch_ok %d %d %d\n", rc, b.ok[0], b.ok[1], b.ok[2]);
+    int mismatch = 0;
+    for (int l = 0; l < 2; l++) {
+        mcdem_body a = bi, o = bj;
+        for (int k = 0; k < 3; k++) {
+            a.x[k] = b.d[k][l] + bj.x[k];
+            a.v[k] = b.vr[k][l] + bj.v[k];
+            o.omega[k] = b.omega_j[k][l];
+        }
+        mcdem_pair_coeffs cl = c;
+        cl.friction = b.friction[l];
+        double sh[3] = {1e-6 * l, 1e-6 * (1 + l), 1e-6 * (2 + l)};
+        mcdem_contact_force one;
+        mismatch += mcdem_particle_particle(&cl, &a, &o, b.dri[l], b.drj[l], 1e-5, sh, &one) != MCDEM_OK;
+        for (int k = 0; k < 3; k++) {
+            mismatch += memcmp(&b.force[k][l], &one.force_i[k], sizeof(double)) != 0;
+            mismatch += memcmp(&b.torque_i[k][l], &one.torque_i[k], sizeof(double)) != 0;
+            mismatch += memcmp(&b.torque_j[k][l], &one.torque_j[k], sizeof(double)) != 0;
+            mismatch += memcmp(&b.shear[k][l], &sh[k], sizeof(double)) != 0;
+        }
+        mismatch += memcmp(&b.normal[l], &one.normal_force, sizeof(double)) != 0;
+    }
+    printf("batch_mismatch %d\nbatch_normal0 %.17g\n", mismatch, b.normal[0]);
+    print_error("batch_empty", mcdem_pair_batch_evaluate(&b, 0, 1e-5));
+    b.damping_ratio_t_n[1] = 0.0;
+    print_error("batch_hand", mcdem_pair_batch_evaluate(&b, 2, 1e-5));
+
     /* Error paths: a message naming the parameter, never a crash. */
     print_error("bad_nu", mcdem_pair_coeffs_new(23.3e3, 0.7, 23.3e3, 0.5, 0.95, 0.03, &c));
     mcdem_mc_params bad = p;
