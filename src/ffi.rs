@@ -162,10 +162,16 @@ fn body(b: &mcdem_body) -> Body {
     Body { x: v3(&b.x), v: v3(&b.v), omega: v3(&b.omega), radius: b.radius, mass: b.mass }
 }
 
+/// Whether a damping ratio √(4G*/E*) is one that `mcdem_pair_coeffs_new` derived (finite, > 0) rather
+/// than the zero of a struct filled by hand.
+fn derived_by_coeffs_new(damping_ratio_t_n: f64) -> bool {
+    damping_ratio_t_n > 0.0 && damping_ratio_t_n.is_finite()
+}
+
 fn coeffs(c: &mcdem_pair_coeffs) -> Result<PairCoeffs, FfiError> {
     // A struct filled by hand rather than by mcdem_pair_coeffs_new lacks the derived ratio, which
     // would silently remove the tangential damping.
-    if !(c.damping_ratio_t_n > 0.0 && c.damping_ratio_t_n.is_finite()) {
+    if !derived_by_coeffs_new(c.damping_ratio_t_n) {
         return Err(FfiError(
             MCDEM_ERR_PARAMETER,
             format!(
@@ -509,7 +515,7 @@ pub unsafe extern "C" fn mcdem_pair_batch_evaluate(batch: *mut PairLanes, used: 
             ));
         }
         // A lane without the derived damping ratio was not filled from mcdem_pair_coeffs_new.
-        if let Some(l) = (0..used).find(|&l| !(b.coeffs.damping_ratio_t_n[l] > 0.0)) {
+        if let Some(l) = (0..used).find(|&l| !derived_by_coeffs_new(b.coeffs.damping_ratio_t_n[l])) {
             return Err(FfiError(
                 MCDEM_ERR_PARAMETER,
                 format!(
