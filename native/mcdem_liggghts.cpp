@@ -6,6 +6,10 @@
  *  - NormalModel<MC_ADVANCED>: the normal force of one contact, computed by mcdem_hertz_normal
  *    on the overlap of the multi-contact-modified radii, plus the per-contact record (contact
  *    surface and |F_n| of this step) that the next step's radius changes need.
+ *  - mc_pair_loop and McBatch: the model's own pair loop, which hands overlapping pairs to the
+ *    core eight at a time (mcdem_pair_batch_evaluate: normal and tangential force together, the
+ *    code `mcdem run` uses) and keeps the one-contact path above for settings and outputs the
+ *    batch does not compute.
  *  - The multi-contact bookkeeping, run by the pair's model at the start of each force pass:
  *    gathers every contact of each owned particle (pairs and walls), calls mcdem_radius_changes
  *    (Eq. 2 with the Eq. 3 cap) and stores the radius change per contact where LIGGGHTS's pair
@@ -946,9 +950,9 @@ public:
     }
     bool active() const { return model_ != NULL; }
 
-    // Neighbour entry jj of i (partner j, centre difference del, modified radii radi, radj) into
-    // the next lane.
-    void push(int i, int j, int jj, const double *del, double radi, double radj) {
+    // Neighbour entry jj of i (partner j, centre difference del, radius changes dri, drj at this
+    // contact) into the next lane.
+    void push(int i, int j, int jj, const double *del, double dri, double drj) {
         const Atom *atom = lmp_->atom;
         const int l = used_;
         double **v = atom->v, **omega = atom->omega;
@@ -962,8 +966,8 @@ public:
         }
         b_.radius_i[l] = atom->radius[i];
         b_.radius_j[l] = atom->radius[j];
-        b_.dri[l] = radi - atom->radius[i];
-        b_.drj[l] = radj - atom->radius[j];
+        b_.dri[l] = dri;
+        b_.drj[l] = drj;
         b_.mass_i[l] = atom->rmass[i];
         b_.mass_j[l] = atom->rmass[j];
         const mcdem_pair_coeffs &c = model_->pair_coeffs(atom->type[i], atom->type[j]);
@@ -975,8 +979,6 @@ public:
         i_[l] = i;
         j_[l] = j;
         jj_[l] = jj;
-        radi_[l] = radi;
-        radj_[l] = radj;
         if (++used_ == MCDEM_BATCH_LANES) flush();
     }
 
@@ -996,7 +998,9 @@ public:
             double *hist = &pg_->listgranhistory->firstdouble[i][dnum_ * jj_[l]];
             for (int k = 0; k < 3; k++) hist[shear_ + k] = b_.shear[k][l];
             if (flags) flags[i][jj_[l]] |= CONTACT_NORMAL_MODEL | CONTACT_TANGENTIAL_MODEL;
-            model_->write_pair_record(&hist[record_], i, j, radi_[l], radj_[l], std::fabs(b_.normal[l]));
+            // The modified radii as the loop and the core form them: original radius + change.
+            model_->write_pair_record(&hist[record_], i, j, b_.radius_i[l] + b_.dri[l], b_.radius_j[l] + b_.drj[l],
+                                      std::fabs(b_.normal[l]));
             const double F[3] = {b_.force[0][l], b_.force[1][l], b_.force[2][l]};
             const double relax_i = pg_->relax(i);
             for (int k = 0; k < 3; k++) {
@@ -1056,7 +1060,6 @@ private:
     double dt_;
     int used_;
     int i_[MCDEM_BATCH_LANES], j_[MCDEM_BATCH_LANES], jj_[MCDEM_BATCH_LANES];
-    double radi_[MCDEM_BATCH_LANES], radj_[MCDEM_BATCH_LANES];
 };
 
 // The batch serves the `tangential history` combination; `no_history` keeps the one-contact path.
@@ -1162,16 +1165,17 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
             double del[3];
             for (int k = 0; k < 3; k++) del[k] = x[i][k] - x[j][k];
             const double rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-            double radi = radius[i], radj = radius[j];
+            double dri = 0.0, drj = 0.0;
             if (rec >= 0) {
                 const double *r = &hist[dnum * jj + rec];
                 const bool i_first = tag[i] < tag[j];
-                radi += r[i_first ? kPairDrLo : kPairDrHi];
-                radj += r[i_first ? kPairDrHi : kPairDrLo];
+                dri = r[i_first ? kPairDrLo : kPairDrHi];
+                drj = r[i_first ? kPairDrHi : kPairDrLo];
             }
+            const double radi = radius[i] + dri, radj = radius[j] + drj;
             const double radsum = radi + radj;
             if (batched && rsq < radsum * radsum && !((mask[i] | mask[j]) & freeze_bit)) {
-                batch.push(i, j, jj, del, radi, radj);
+                batch.push(i, j, jj, del, dri, drj);
                 continue;
             }
             sidata.radj = radj;
