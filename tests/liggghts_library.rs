@@ -32,9 +32,13 @@ fn library_interface_opens_an_instance_and_reads_atoms() {
     let mut l = mcdem::liggghts::Liggghts::open(&["-log", log.to_str().unwrap(), "-screen", "none"]).unwrap();
     let deck = decks().join("two_particles.in");
     let dump = tmp.path().join("lib.dump");
+    // Every output of the deck into the temporary directory (the contact dump too: its default
+    // name would land in the working directory, the checkout).
+    let contacts = tmp.path().join("lib_contacts.dump");
     l.commands([
         format!("variable dir index {}", decks().display()).as_str(),
         format!("variable dump index {}", dump.display()).as_str(),
+        format!("variable contacts index {}", contacts.display()).as_str(),
         "variable steps index 200",
     ])
     .unwrap();
