@@ -22,10 +22,10 @@
 
 #include <mpi.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <algorithm>
 #include <cstring>
 #include <map>
 #include <string>
@@ -182,6 +182,21 @@ std::string last_mcdem_error() {
     char buf[512];
     mcdem_last_error(buf, sizeof(buf));
     return std::string(buf);
+}
+
+// Stops the run at a contact the model cannot integrate: one ERROR line naming the particles
+// (j < 0: particle i at a wall), the step and the core's reason. Both pair paths and the walls
+// report through here.
+void stop_at_contact(LAMMPS *lmp, int i, int j, const std::string &why) {
+    char who[64];
+    if (j < 0)
+        std::snprintf(who, sizeof(who), "particle %d at a wall", lmp->atom->tag[i]);
+    else
+        std::snprintf(who, sizeof(who), "particles %d and %d", lmp->atom->tag[i], lmp->atom->tag[j]);
+    char msg[800];
+    std::snprintf(msg, sizeof(msg), "model mc_advanced: %s, step " BIGINT_FORMAT ": %s", who,
+                  lmp->update->ntimestep, why.c_str());
+    lmp->error->one(FLERR, msg);
 }
 
 // Offset of the per-contact record in a contact history. LIGGGHTS's HistoryData scales the offset
@@ -381,17 +396,8 @@ public:
         const double rmin = sidata.is_wall ? radius[sidata.i] : std::min(radius[sidata.i], radius[sidata.j]);
         mcdem_normal_force nf;
         if (mcdem_check_overlap(sidata.deltan, rmin) != MCDEM_OK ||
-            mcdem_hertz_normal(&coeffs_[it][jt], deltan, reff, sidata.meff, sidata.vn, &nf) != MCDEM_OK) {
-            char who[64];
-            if (sidata.is_wall)
-                std::snprintf(who, sizeof(who), "particle %d at a wall", atom->tag[sidata.i]);
-            else
-                std::snprintf(who, sizeof(who), "particles %d and %d", atom->tag[sidata.i], atom->tag[sidata.j]);
-            char msg[800];
-            std::snprintf(msg, sizeof(msg), "model mc_advanced: %s, step " BIGINT_FORMAT ": %s", who,
-                          update->ntimestep, last_mcdem_error().c_str());
-            error->one(FLERR, msg);
-        }
+            mcdem_hertz_normal(&coeffs_[it][jt], deltan, reff, sidata.meff, sidata.vn, &nf) != MCDEM_OK)
+            stop_at_contact(lmp, sidata.i, sidata.is_wall ? -1 : sidata.j, last_mcdem_error());
         double fn = nf.force;
         if (limit_force_ && fn < 0.0) fn = 0.0;
         sidata.Fn = fn;
@@ -948,7 +954,6 @@ public:
         dt_ = lmp->update->dt;
         return true;
     }
-    bool active() const { return model_ != NULL; }
 
     // Neighbour entry jj of i (partner j, centre difference del, radius changes dri, drj at this
     // contact) into the next lane.
@@ -1041,15 +1046,10 @@ private:
         double shear[3] = {hist[0], hist[1], hist[2]};
         mcdem_contact_force out;
         const Atom *atom = lmp_->atom;
-        const std::string why =
+        const bool explained =
             mcdem_particle_particle(&model_->pair_coeffs(atom->type[i_[l]], atom->type[j_[l]]), &bi, &bj, b_.dri[l],
-                                    b_.drj[l], dt_, shear, &out) != MCDEM_OK
-                ? last_mcdem_error()
-                : std::string("contact force not finite");
-        char msg[800];
-        std::snprintf(msg, sizeof(msg), "model mc_advanced: particles %d and %d, step " BIGINT_FORMAT ": %s",
-                      atom->tag[i_[l]], atom->tag[j_[l]], lmp_->update->ntimestep, why.c_str());
-        lmp_->error->one(FLERR, msg);
+                                    b_.drj[l], dt_, shear, &out) != MCDEM_OK;
+        stop_at_contact(lmp_, i_[l], j_[l], explained ? last_mcdem_error() : std::string("contact force not finite"));
     }
 
     mcdem_pair_batch b_;
