@@ -93,6 +93,9 @@ enum Command {
         /// Run only this scene group (repeatable; default: all)
         #[arg(long = "scene", value_parser = clap::builder::PossibleValuesParser::new(mcdem::bench::SCENES))]
         scenes: Vec<String>,
+        /// Passes over the selected groups; rates and ratios are the medians over the passes
+        #[arg(long, default_value_t = 1)]
+        rounds: usize,
         /// Only write the dense packing with 4 K³ spheres as a data file for
         /// liggghts_inputs/dense_packing.in (prints the time step it was built for), then stop
         #[arg(long, num_args = 2, value_names = ["K", "FILE"], allow_negative_numbers = true)]
@@ -402,6 +405,7 @@ fn bench(
     quick: bool,
     json: Option<PathBuf>,
     scenes: Vec<String>,
+    rounds: usize,
     write: Option<Vec<String>>,
 ) -> Result<(), String> {
     if let Some(w) = write {
@@ -414,7 +418,8 @@ fn bench(
         println!("{} spheres written to {}; run it with -var dt {:?}", world.p.len(), w[1], world.dt);
         return Ok(());
     }
-    let report = mcdem::bench::run(mcdem::bench::Options { quick, scenes }, &mut |l| eprintln!("{l}"))?;
+    let report =
+        mcdem::bench::run(mcdem::bench::Options { quick, scenes, rounds }, &mut |l| eprintln!("{l}"))?;
     print!("{}", mcdem::bench::table(&report));
     if let Some(p) = json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
@@ -435,7 +440,9 @@ fn main() -> ExitCode {
             rayon::scope(|_| run(deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every))
         }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
-        Command::Bench { quick, json, scenes, write_packing } => bench(quick, json, scenes, write_packing),
+        Command::Bench { quick, json, scenes, rounds, write_packing } => {
+            bench(quick, json, scenes, rounds, write_packing)
+        }
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
         Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, solid_volume, out } => {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)

@@ -110,3 +110,47 @@ fn write_packing_writes_a_data_file_and_refuses_a_bad_size() {
         assert!(!out.status.success() && err.contains("--write-packing K"), "{bad}: {err}");
     }
 }
+
+/// `--rounds 2`: each repeated row carries both rounds' rates with its median, the ratios carry
+/// their range over the rounds, and the targets are checked on the medians; `--rounds 0` is refused.
+#[test]
+fn rounds_report_medians_ranges_and_targets() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let out = bench(&["--quick", "--scene", "packing", "--rounds", "2", "--json"], &json);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("targets:") && table.contains("2 rounds"), "{table}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["rounds"], 2);
+    let rows = v["rows"].as_array().unwrap();
+    let hertz = rows
+        .iter()
+        .find(|r| r["scene"] == "packing_phi0.8_N2048" && r["model"] == "hertz" && r["threads"] == 1)
+        .unwrap();
+    let rates: Vec<f64> = hertz["rounds_particle_steps_per_s"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(rates.len(), 2, "{hertz}");
+    let median = hertz["particle_steps_per_s"].as_f64().unwrap();
+    assert!((median - 0.5 * (rates[0] + rates[1])).abs() <= 1e-9 * median, "{hertz}");
+    // The first round runs every row, later ones the rows the targets read.
+    let mc =
+        rows.iter().find(|r| r["scene"] == "packing_phi0.8_N2048" && r["model"] == "mc_advanced").unwrap();
+    assert_eq!(mc["rounds_particle_steps_per_s"].as_array().unwrap().len(), 1, "{mc}");
+    let key = "packing hertz 1 thread: cost per particle-step N=19652 / N=2048";
+    let ratio = v["ratios"][key].as_f64().unwrap();
+    let range = v["ratio_ranges"][key].as_array().unwrap();
+    let (lo, hi) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+    assert!(lo <= ratio && ratio <= hi, "{ratio} outside [{lo}, {hi}]");
+    let target = v["targets"].as_array().unwrap().iter().find(|t| t["name"] == key).unwrap();
+    assert_eq!(target["value"].as_f64().unwrap(), ratio);
+    assert_eq!(target["met"].as_bool().unwrap(), ratio <= 1.3);
+
+    let out = bench(&["--quick", "--scene", "kernel", "--rounds", "0", "--json"], &json);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--rounds must be at least 1"), "{err}");
+}

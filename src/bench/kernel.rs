@@ -37,6 +37,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) {
                 particle_steps_per_s: calls as f64 / secs,
                 wall_time_s: secs,
                 memory_bytes_per_particle: None,
+                rounds_particle_steps_per_s: Vec::new(),
             });
         }
         say(&format!("kernel, {n} contacts: done"));

@@ -7,6 +7,11 @@
 //! packing (φ = 0.8) at growing N for the Rust DEM, in process (with its memory) and as a deck run by
 //! both engines (LIGGGHTS on 1 and 2 MPI ranks, the Rust DEM on 1 and 2 threads); the contact-set
 //! kernel at 2, 6 and 12 contacts.
+//!
+//! With `--rounds R` every selected group runs R times, one whole pass after another, so that each
+//! row is sampled at R moments of the machine's load. A ratio is formed within each round (its two
+//! rows ran minutes apart at most) and the report gives the median over the rounds with the range;
+//! a row's rate is its median. The targets of the bench are checked on these medians.
 
 mod hydrogel;
 mod kernel;
@@ -34,18 +39,42 @@ pub struct Row {
     /// Resident memory added by the scene, per particle (dense packing rows).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub memory_bytes_per_particle: Option<f64>,
+    /// The rate of each round, in round order, when the bench ran more than one (the row's
+    /// `particle_steps_per_s` is their median).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub rounds_particle_steps_per_s: Vec<f64>,
 }
 
 /// What `mcdem bench` prints and writes.
 #[derive(Debug, Default, Serialize)]
 pub struct Report {
     pub rows: Vec<Row>,
-    /// Named ratios of rows of this run (costs: > 1 means slower).
+    /// Rounds the bench ran (each selected group once per round).
+    pub rounds: usize,
+    /// Named ratios of rows of this run (costs: > 1 means slower); with several rounds the median
+    /// of the ratios formed within each round.
     pub ratios: BTreeMap<String, f64>,
+    /// With several rounds: the smallest and largest per-round value of each ratio.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub ratio_ranges: BTreeMap<String, [f64; 2]>,
     /// Which row groups ran, and why others did not.
     pub notes: Vec<String>,
     /// Accuracy paid for speed: named errors of approximate rows against their exact run.
     pub errors: BTreeMap<String, f64>,
+    /// The bench's speed targets, checked on the (median) ratios and rows above.
+    pub targets: Vec<Target>,
+}
+
+/// One speed target and whether this run meets it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Target {
+    /// What is compared, e.g. `hydrogel hertz: rust 2 threads vs liggghts 1 rank, speed-up`.
+    pub name: String,
+    pub value: f64,
+    /// `<=` or `>=`: how `value` must stand to `bound`.
+    pub relation: &'static str,
+    pub bound: f64,
+    pub met: bool,
 }
 
 #[derive(Debug, Clone)]
@@ -54,6 +83,10 @@ pub struct Options {
     pub quick: bool,
     /// Scene groups to run (names from [`SCENES`]); empty = all.
     pub scenes: Vec<String>,
+    /// Passes over the selected groups (≥ 1). The first runs every row, later ones the rows the
+    /// targets read (the stock LIGGGHTS `surface multicontact` row alone takes longer than all
+    /// of those together).
+    pub rounds: usize,
 }
 
 /// The scene groups, in the order they run.
@@ -65,26 +98,157 @@ impl Options {
     }
 }
 
-/// Runs every available row group; `say` receives progress lines.
+/// Runs every available row group `opts.rounds` times; `say` receives progress lines.
 pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
-    let mut report = Report::default();
     if let Some(bad) = opts.scenes.iter().find(|s| !SCENES.contains(&s.as_str())) {
         return Err(format!("ERROR: unknown bench scene '{bad}' (expected one of {})", SCENES.join(", ")));
     }
-    if opts.runs("kernel") {
-        kernel::rows(&opts, &mut report, say);
+    if opts.rounds == 0 {
+        return Err("ERROR: --rounds must be at least 1".into());
     }
-    if opts.runs("packing") {
-        packing::rows(&opts, &mut report, say)?;
+    let mut rounds = Vec::with_capacity(opts.rounds);
+    for round in 0..opts.rounds {
+        if opts.rounds > 1 {
+            say(&format!("round {} of {}", round + 1, opts.rounds));
+        }
+        let mut report = Report::default();
+        if opts.runs("kernel") {
+            kernel::rows(&opts, &mut report, say);
+        }
+        if opts.runs("packing") {
+            packing::rows(&opts, round, &mut report, say)?;
+        }
+        if opts.runs("hydrogel") {
+            hydrogel::rows(&opts, round, &mut report, say)?;
+        }
+        if opts.runs("nonlocal") {
+            nonlocal::rows(&opts, &mut report, say)?;
+        }
+        ratios(&mut report);
+        rounds.push(report);
     }
-    if opts.runs("hydrogel") {
-        hydrogel::rows(&opts, &mut report, say)?;
-    }
-    if opts.runs("nonlocal") {
-        nonlocal::rows(&opts, &mut report, say)?;
-    }
-    ratios(&mut report);
+    let mut report = merge(rounds);
+    report.targets = targets(&report);
     Ok(report)
+}
+
+/// Median of a non-empty list (mean of the middle two for an even count).
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        0.5 * (v[m - 1] + v[m])
+    }
+}
+
+/// One report from the rounds: each row's median rate (and wall time, memory), each ratio's
+/// median over the rounds that formed it, with its range; errors are the largest seen (they are
+/// deterministic, so the rounds agree); the notes of the first round.
+fn merge(rounds: Vec<Report>) -> Report {
+    let n = rounds.len();
+    let mut it = rounds.into_iter();
+    let mut out = it.next().unwrap_or_default();
+    out.rounds = n;
+    if n == 1 {
+        return out;
+    }
+    let later: Vec<Report> = it.collect();
+    let same = |a: &Row, b: &Row| {
+        a.engine == b.engine
+            && a.model == b.model
+            && a.scene == b.scene
+            && a.n == b.n
+            && a.threads == b.threads
+    };
+    for row in &mut out.rows {
+        let matches: Vec<&Row> = std::iter::once(&*row)
+            .chain(later.iter().flat_map(|r| r.rows.iter().filter(|x| same(row, x))))
+            .collect();
+        let mut rates: Vec<f64> = matches.iter().map(|x| x.particle_steps_per_s).collect();
+        let mut walls: Vec<f64> = matches.iter().map(|x| x.wall_time_s).collect();
+        let mut mem: Vec<f64> = matches.iter().filter_map(|x| x.memory_bytes_per_particle).collect();
+        row.rounds_particle_steps_per_s = rates.clone();
+        row.particle_steps_per_s = median(&mut rates);
+        row.wall_time_s = median(&mut walls);
+        if !mem.is_empty() {
+            row.memory_bytes_per_particle = Some(median(&mut mem));
+        }
+    }
+    let mut ratios = BTreeMap::new();
+    for (k, &v) in &out.ratios {
+        let mut all: Vec<f64> =
+            std::iter::once(v).chain(later.iter().filter_map(|r| r.ratios.get(k).copied())).collect();
+        if all.len() > 1 {
+            let lo = all.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = all.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            out.ratio_ranges.insert(k.clone(), [lo, hi]);
+        }
+        ratios.insert(k.clone(), median(&mut all));
+    }
+    out.ratios = ratios;
+    for r in &later {
+        for (k, &e) in &r.errors {
+            let v = out.errors.entry(k.clone()).or_insert(e);
+            *v = v.max(e);
+        }
+    }
+    out.notes.push(format!(
+        "{n} rounds: the first ran every row, later ones the rows the targets read; a row's rate is the median of its rounds, a ratio the median of the ratios formed within each round ([min, max] beside it when more than one)"
+    ));
+    out
+}
+
+/// The targets of the bench (docs/dem.md, "Speed targets"), where this run has their rows.
+/// Ratios are costs; speed-ups are their inverses.
+fn targets(r: &Report) -> Vec<Target> {
+    let mut t = Vec::new();
+    let mut push = |name: String, value: f64, relation: &'static str, bound: f64| {
+        let met = if relation == "<=" { value <= bound } else { value >= bound };
+        t.push(Target { name, value, relation, bound, met });
+    };
+    let (tol, every) = hydrogel::TARGET_APPROXIMATION;
+    let fast = hydrogel::approximate_model(tol, every);
+    for (label, engine) in [("rust 1 thread", "rust"), ("liggghts", "liggghts")] {
+        for m in ["mc_advanced", fast.as_str()] {
+            if let Some(&v) = r.ratios.get(&format!("{label}: {m} / hertz")) {
+                push(format!("hydrogel, {engine}: cost {m} / hertz"), v, "<=", 1.3);
+            }
+        }
+    }
+    if let Some(&v) = r.ratios.get("hertz: rust 1 thread / liggghts") {
+        push("hydrogel hertz: speed-up rust 1 thread / liggghts 1 rank".into(), 1.0 / v, ">=", 1.5);
+    }
+    if let Some(&v) = r.ratios.get("hertz: rust 2 threads / liggghts") {
+        push("hydrogel hertz: speed-up rust 2 threads / liggghts 1 rank".into(), 1.0 / v, ">=", 2.5);
+    }
+    for (k, &v) in &r.ratios {
+        if let Some(n) = k.strip_prefix("hertz packing deck N=") {
+            let n = n.split(':').next().unwrap_or_default();
+            if k.ends_with("rust 1 thread / liggghts 1 rank") {
+                push(
+                    format!("packing deck N={n} hertz: speed-up rust 1 thread / liggghts 1 rank"),
+                    1.0 / v,
+                    ">=",
+                    1.5,
+                );
+            } else if k.ends_with("rust 2 threads / liggghts 1 rank") {
+                push(
+                    format!("packing deck N={n} hertz: speed-up rust 2 threads / liggghts 1 rank"),
+                    1.0 / v,
+                    ">=",
+                    2.5,
+                );
+            }
+        } else if k.starts_with("packing hertz 1 thread: cost per particle-step") {
+            push(k.clone(), v, "<=", 1.3);
+        }
+    }
+    for x in r.rows.iter().filter(|x| x.scene == nonlocal::SCENE) {
+        push(format!("{}: seconds to phi = 0.85", x.model), x.wall_time_s, "<=", 60.0);
+    }
+    t
 }
 
 fn find<'a>(r: &'a Report, engine: &str, model: &str, scene: &str, threads: usize) -> Option<&'a Row> {
@@ -184,7 +348,8 @@ pub fn table(r: &Report) -> String {
     }
     s.push_str("\nratios (cost, > 1 = slower):\n");
     for (k, v) in &r.ratios {
-        s.push_str(&format!("  {k:<60} {v:.2}\n"));
+        let range = r.ratio_ranges.get(k).map_or(String::new(), |[lo, hi]| format!("  [{lo:.2}, {hi:.2}]"));
+        s.push_str(&format!("  {k:<60} {v:.2}{range}\n"));
     }
     if !r.errors.is_empty() {
         s.push_str("\nerrors of approximate rows:\n");
@@ -192,8 +357,80 @@ pub fn table(r: &Report) -> String {
             s.push_str(&format!("  {k:<60} {v:.2e}\n"));
         }
     }
+    if !r.targets.is_empty() {
+        s.push_str("\ntargets:\n");
+        for x in &r.targets {
+            let mark = if x.met { "met    " } else { "not met" };
+            s.push_str(&format!("  {mark} {:<66} {:.2} {} {}\n", x.name, x.value, x.relation, x.bound));
+        }
+    }
     for n in &r.notes {
         s.push_str(&format!("note: {n}\n"));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(engine: &'static str, threads: usize, rate: f64) -> Row {
+        Row {
+            engine,
+            model: "hertz".into(),
+            scene: hydrogel::SCENE.into(),
+            n: 514,
+            threads,
+            particle_steps_per_s: rate,
+            wall_time_s: 514.0 / rate,
+            memory_bytes_per_particle: None,
+            rounds_particle_steps_per_s: Vec::new(),
+        }
+    }
+
+    /// One round: LIGGGHTS at `l` and the Rust DEM at `r1` (1 thread), `r2` (2 threads).
+    fn round(l: f64, r1: f64, r2: f64) -> Report {
+        let mut r = Report {
+            rows: vec![row("liggghts", 1, l), row("rust", 1, r1), row("rust", 2, r2)],
+            ..Default::default()
+        };
+        ratios(&mut r);
+        r
+    }
+
+    #[test]
+    fn rounds_give_median_rows_and_median_ratios_formed_within_each_round() {
+        // The machine slows down by half in round 2: the rows' rates move, their ratio does not.
+        let merged = merge(vec![round(4.0, 8.0, 12.0), round(2.0, 4.0, 6.0), round(4.0, 6.0, 8.0)]);
+        assert_eq!(merged.rounds, 3);
+        let rust1 = find(&merged, "rust", "hertz", hydrogel::SCENE, 1).unwrap();
+        assert_eq!(rust1.particle_steps_per_s, 6.0);
+        assert_eq!(rust1.rounds_particle_steps_per_s, vec![8.0, 4.0, 6.0]);
+        // Costs rust / liggghts per round: 0.5, 0.5, 2/3; median 0.5 (the medians of the rows
+        // would give 4/6).
+        assert_eq!(merged.ratios["hertz: rust 1 thread / liggghts"], 0.5);
+        assert_eq!(merged.ratio_ranges["hertz: rust 1 thread / liggghts"], [0.5, 4.0 / 6.0]);
+        let t = targets(&merged);
+        let speedup = |name: &str| t.iter().find(|x| x.name.contains(name)).unwrap();
+        let one = speedup("rust 1 thread / liggghts 1 rank");
+        assert_eq!((one.value, one.met), (2.0, true));
+        // 2 threads: speed-ups 3, 3, 2 → median 3 ≥ 2.5.
+        let two = speedup("rust 2 threads / liggghts 1 rank");
+        assert_eq!((two.value, two.met), (3.0, true));
+        let slow = targets(&merge(vec![round(4.0, 5.0, 8.0)]));
+        assert!(!slow.iter().find(|x| x.name.contains("rust 1 thread")).unwrap().met, "1.25 < 1.5");
+    }
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+
+    #[test]
+    fn zero_rounds_are_refused() {
+        let e =
+            run(Options { quick: true, scenes: vec!["kernel".into()], rounds: 0 }, &mut |_| {}).unwrap_err();
+        assert!(e.contains("--rounds"), "{e}");
+    }
 }

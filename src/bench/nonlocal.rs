@@ -39,6 +39,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
             particle_steps_per_s: (spheres.len() * points.len()) as f64 / secs,
             wall_time_s: secs,
             memory_bytes_per_particle: None,
+            rounds_particle_steps_per_s: Vec::new(),
         });
     }
     report.notes.push(format!(

@@ -203,6 +203,7 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
                     particle_steps_per_s: rate,
                     wall_time_s: secs,
                     memory_bytes_per_particle: None,
+                    rounds_particle_steps_per_s: Vec::new(),
                 });
             }
         }
@@ -221,7 +222,14 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
 /// Scene name of the deck rows.
 pub const DECK_SCENE: &str = "packing_deck_phi0.8";
 
-pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> Result<(), String> {
+/// The rows of one round (`round` from 0). Later rounds repeat the rows the targets read: the
+/// in-process Hertz rows on one thread (cost per particle-step against N) and every deck row.
+pub fn rows(
+    opts: &Options,
+    round: usize,
+    report: &mut Report,
+    say: &mut dyn FnMut(&str),
+) -> Result<(), String> {
     // At least ~4e6 particle-steps per row (the small packing's steps are short: timing noise),
     // after a warm-up that covers the engine's first serial-vs-threads probe.
     let steps_for = |n: usize| steps_for(opts.quick, n);
@@ -230,6 +238,9 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
     for &k in cells(opts.quick) {
         for (model, advanced) in [("hertz", false), ("mc_advanced", true)] {
             for threads in [1, 2] {
+                if round > 0 && (advanced || threads > 1) {
+                    continue;
+                }
                 let pool = rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
                     .build()
@@ -262,6 +273,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
                     particle_steps_per_s: (n * steps) as f64 / secs,
                     wall_time_s: secs,
                     memory_bytes_per_particle: mem,
+                    rounds_particle_steps_per_s: Vec::new(),
                 });
                 say(&format!(
                     "packing N = {n}, {model}, {threads} thread(s): {:.3e} particle-steps/s",
