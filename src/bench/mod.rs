@@ -68,7 +68,7 @@ pub struct Report {
 /// One speed target and whether this run meets it.
 #[derive(Debug, Clone, Serialize)]
 pub struct Target {
-    /// What is compared, e.g. `hydrogel hertz: rust 2 threads vs liggghts 1 rank, speed-up`.
+    /// What is compared, e.g. `hydrogel hertz: speed-up rust 2 threads / liggghts 1 rank`.
     pub name: String,
     pub value: f64,
     /// `<=` or `>=`: how `value` must stand to `bound`.
@@ -200,7 +200,7 @@ fn merge(rounds: Vec<Report>) -> Report {
     out
 }
 
-/// The targets of the bench (docs/dem.md, "Speed targets"), where this run has their rows.
+/// The targets of the bench (docs/bench.md, "Targets"), where this run has their rows.
 /// Ratios are costs; speed-ups are their inverses.
 fn targets(r: &Report) -> Vec<Target> {
     let mut t = Vec::new();
