@@ -4,7 +4,7 @@ use std::io::Read;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 
 #[derive(Parser)]
 #[command(name = "mcdem", version, about = "Advanced multi-contact DEM for strongly deformed soft particles")]
@@ -43,6 +43,11 @@ enum Command {
         /// 1 = every step, exact; an approximation that trades accuracy for speed, see docs/dem.md)
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..=mcdem::deck::MAX_UPDATE_EVERY))]
         mc_update_every: Option<u64>,
+        /// Whether a step's force passes use both threads of the pool: `auto` (default) times
+        /// windows of steps each way every 5000 steps and keeps the faster; `serial` and
+        /// `parallel` fix the choice. Results are bit-identical in all three; only speed differs.
+        #[arg(long, value_enum, default_value_t = ThreadsMode::Auto)]
+        threads_mode: ThreadsMode,
     },
     /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path
     Nonlocal {
@@ -261,14 +266,24 @@ fn validate(quick: bool, cases: Vec<String>, out: PathBuf) -> Result<(), String>
     }
 }
 
-fn run(
-    deck: PathBuf,
-    var: Vec<String>,
-    log: Option<PathBuf>,
+/// `mcdem run`'s thread use of the force passes ([`mcdem::engine::PairThreads`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ThreadsMode {
+    Auto,
+    Serial,
+    Parallel,
+}
+
+/// `mcdem run`'s flags beyond the deck, its variables and the log.
+struct RunFlags {
     no_progress: bool,
     mc_geometry_tolerance: f64,
     mc_update_every: Option<u64>,
-) -> Result<(), String> {
+    threads_mode: ThreadsMode,
+}
+
+fn run(deck: PathBuf, var: Vec<String>, log: Option<PathBuf>, flags: RunFlags) -> Result<(), String> {
+    let RunFlags { no_progress, mc_geometry_tolerance, mc_update_every, threads_mode } = flags;
     if !(mc_geometry_tolerance.is_finite() && mc_geometry_tolerance >= 0.0) {
         return Err(format!(
             "ERROR: --mc-geometry-tolerance must be a finite number >= 0 (a fraction of the particle radius), got {mc_geometry_tolerance}"
@@ -282,7 +297,11 @@ fn run(
         quiet: false,
         mc_geometry_tolerance,
         mc_every: mc_update_every.unwrap_or(0),
-        ..Default::default()
+        pair_threads: match threads_mode {
+            ThreadsMode::Auto => mcdem::engine::PairThreads::Auto,
+            ThreadsMode::Serial => mcdem::engine::PairThreads::Serial,
+            ThreadsMode::Parallel => mcdem::engine::PairThreads::Parallel,
+        },
     };
     mcdem::deck::run_file(&deck, &opts).map(|_| ()).map_err(|e| format!("ERROR: {e}"))
 }
@@ -436,8 +455,9 @@ fn main() -> ExitCode {
         // The time loop runs on a worker of the thread pool: the pair loop's parallel halves then
         // start on this thread while the other worker is still spinning from the previous step,
         // instead of a blocked caller waking sleeping workers every step.
-        Command::Run { deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every } => {
-            rayon::scope(|_| run(deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every))
+        Command::Run { deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every, threads_mode } => {
+            let opts = RunFlags { no_progress, mc_geometry_tolerance, mc_update_every, threads_mode };
+            rayon::scope(|_| run(deck, var, log, opts))
         }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json, scenes, rounds, write_packing } => {

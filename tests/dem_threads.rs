@@ -1,4 +1,4 @@
-//! The Rust DEM on two threads gives the serial result bit for bit: pair forces are summed in
+//! The Rust DEM on two (or more) threads gives the serial result bit for bit: pair forces are summed in
 //! pair order (by blocks that own their particles and defer the rest, or from every pair's kept
 //! result), and the multi-contact kernel runs per particle on
 //! disjoint ranges (kept influence matrices included), whatever the thread count. That is what
@@ -17,8 +17,8 @@ fn decks() -> PathBuf {
 }
 
 /// The 514-particle hydrogel deck, two fast strokes; returns the piston-force file's bytes.
-fn piston_force(dir: &Path, law: &str, geomtol: &str, threads: PairThreads) -> Vec<u8> {
-    let out = dir.join(format!("piston_{law}_{geomtol}_{threads:?}.txt"));
+fn piston_force(dir: &Path, law: &str, geomtol: &str, threads: PairThreads, pool: usize) -> Vec<u8> {
+    let out = dir.join(format!("piston_{law}_{geomtol}_{threads:?}_{pool}.txt"));
     let vars = [
         ("geomtol", geomtol.to_string()),
         ("law", law.to_string()),
@@ -35,7 +35,7 @@ fn piston_force(dir: &Path, law: &str, geomtol: &str, threads: PairThreads) -> V
         pair_threads: threads,
         ..Default::default()
     };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(pool).build().unwrap();
     pool.install(|| run_file(&decks().join("hydrogel.in"), &opts)).unwrap();
     std::fs::read(out).unwrap()
 }
@@ -47,12 +47,15 @@ fn two_threads_give_the_serial_result_bit_for_bit() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
-    // Hertz, exact advanced MC, and advanced MC with kept influence matrices.
+    // Hertz, exact advanced MC, and advanced MC with kept influence matrices; two threads, and
+    // three (more members than cores: the splits of every pass into more than two ranges).
     for (law, geomtol) in [("1", "0"), ("0", "0"), ("0", "1e-3")] {
-        let serial = piston_force(tmp.path(), law, geomtol, PairThreads::Serial);
-        let parallel = piston_force(tmp.path(), law, geomtol, PairThreads::Parallel);
+        let serial = piston_force(tmp.path(), law, geomtol, PairThreads::Serial, 2);
         assert!(serial.len() > 1000, "law {law}: piston output too short");
-        assert!(serial == parallel, "law {law}, geomtol {geomtol}: two threads changed the piston force");
+        for pool in [2, 3] {
+            let parallel = piston_force(tmp.path(), law, geomtol, PairThreads::Parallel, pool);
+            assert!(serial == parallel, "law {law}, geomtol {geomtol}: {pool} threads changed the piston force");
+        }
     }
 }
 
@@ -63,10 +66,16 @@ fn two_threads_give_the_serial_result_bit_for_bit() {
 /// angular velocities and the recorded pair forces after ten steps, Hertz and advanced MC.
 #[test]
 fn both_threaded_pair_passes_give_the_serial_state() {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    let cases =
-        [(17, false, false, true), (17, true, false, true), (8, false, false, true), (8, false, true, false)];
-    for (k, advanced, scrambled, owned) in cases {
+    let cases = [
+        (17, false, false, true, 2),
+        (17, true, false, true, 2),
+        (8, false, false, true, 2),
+        (8, false, true, false, 2),
+        (8, true, false, true, 3),
+        (8, false, true, false, 3),
+    ];
+    for (k, advanced, scrambled, owned, threads) in cases {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let run = |threads: PairThreads| {
             let mut w = mcdem::bench::packing::scene(k, advanced).unwrap();
             if scrambled {
@@ -85,9 +94,9 @@ fn both_threaded_pair_passes_give_the_serial_state() {
         let ((serial, none), (parallel, passes)) = (run(PairThreads::Serial), run(PairThreads::Parallel));
         assert_eq!(none, (0, 0));
         let expected = if owned { (10, 0) } else { (0, 10) };
-        let what = format!("k {k}, advanced {advanced}, scrambled {scrambled}");
+        let what = format!("k {k}, advanced {advanced}, scrambled {scrambled}, {threads} threads");
         assert_eq!(passes, expected, "{what}: (owned-block, kept) passes");
-        assert!(serial == parallel, "{what}: two threads changed the state");
+        assert!(serial == parallel, "{what}: threads changed the state");
     }
 }
 

@@ -11,11 +11,12 @@
 
 pub mod mesh;
 pub mod neighbor;
+pub mod team;
 
 use std::cell::RefCell;
 use std::fmt;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::ops::Range;
+use std::sync::Mutex;
 
 use crate::physics::contact_set::{
     loaded_threshold, radius_changes, ContactLoad, InfluenceCache, KeptInfluence, McParams,
@@ -28,6 +29,7 @@ use crate::physics::{Material, PairCoeffs, Vec3};
 
 pub use mesh::Mesh;
 use neighbor::CellList;
+use team::{share, SplitMut, Team};
 
 /// Moment of inertia prefactor of a solid sphere, I = 0.4 m r² (as LIGGGHTS `nve/sphere`).
 const INERTIA: f64 = 0.4;
@@ -428,6 +430,14 @@ pub struct World {
     owner: Vec<u16>,
     /// (pairs, blocks, particles) the owners were computed for; None after a neighbour build.
     owner_key: Option<(usize, usize, usize)>,
+    /// Where the blocks of the owning threaded pass start in the pair list (and the end): equal
+    /// runs after each assignment, then moved by [`World::balance_blocks`] to even out the
+    /// members' measured times.
+    pair_cuts: Vec<usize>,
+    /// Per block, nanoseconds spent in the threaded pair pass since the last balancing, and the
+    /// passes counted.
+    block_ns: Vec<u64>,
+    block_passes: u32,
     /// Few enough pair ends fall on particles another block owns for the blocks to pay (else the
     /// threaded pass keeps every pair's result and sums per particle afterwards).
     owned_blocks_pay: bool,
@@ -462,11 +472,12 @@ pub struct World {
     /// Whether a step's force passes (pairs, walls, multi-contact kernel) use the thread pool
     /// (default: decided by the timing probe).
     pub pair_threads: PairThreads,
-    /// Set when a step reaches its first threaded pass (by the pair pass in any case): ends the
-    /// warm-up job ([`World::warm_up_pool`]).
-    pool_go: Arc<AtomicBool>,
-    /// A warm-up job was spawned and has not started yet: no second one is queued behind it.
-    warm_up_queued: Arc<AtomicBool>,
+    /// The threads of the threaded passes (`rayon::current_num_threads()` members, started at
+    /// the first threaded step and kept for the run).
+    team: Option<Team>,
+    /// Per member of the threaded wall pass: its first wall contact and first particle (and
+    /// after the last member, the ends).
+    wall_cuts: Vec<[usize; 2]>,
 }
 
 /// Whether the force passes of a step (pairs, wall contacts, the multi-contact kernel) run on the
@@ -557,6 +568,12 @@ impl World {
         self.neighbor_check().map_err(|e| e.to_string())?;
         // LIGGGHTS zeroes mesh node velocities at set-up (fix move/mesh sets them again in the
         // first step), so the set-up forces see resting meshes.
+        // The threads' team is started here rather than inside the timing probe's first window.
+        if self.pair_threads != PairThreads::Serial && rayon::current_num_threads() > 1 {
+            let parallel = std::mem::replace(&mut self.parallel, true);
+            self.threads();
+            self.parallel = parallel;
+        }
         let vel: Vec<Vec3> = self.meshes.iter().map(|m| m.velocity).collect();
         self.meshes.iter_mut().for_each(|m| m.velocity = Vec3::zeros());
         let r = self.compute_forces(false).map_err(|e| e.to_string());
@@ -574,8 +591,10 @@ impl World {
         // way). Whole steps, so that what threading changes outside the threaded passes counts
         // too, but without the neighbour check: a list build costs the same in both modes and
         // would weigh on whichever slice it falls in. The two alternate in slices, so that a
-        // passing disturbance (another process, the pool's first wake-up, buffers allocated at
-        // their first use) is shared rather than blamed on one.
+        // passing disturbance (another process, buffers allocated at their first use) is shared
+        // rather than blamed on one. The first steps of a slice are not timed: after a switch
+        // the particles' state sits in the other core's cache (and a parked helper must wake),
+        // which a run that keeps one mode does not pay.
         let phase = self.step % TUNE_PERIOD;
         let probe = match self.pair_threads {
             PairThreads::Auto => phase < 2 * TUNE_WINDOW,
@@ -587,10 +606,7 @@ impl World {
         if probe {
             self.parallel = (phase / TUNE_SLICE) % 2 == 1;
         }
-        let t0 = probe.then(std::time::Instant::now);
-        if self.parallel {
-            self.warm_up_pool();
-        }
+        let t0 = (probe && phase % TUNE_SLICE >= TUNE_SETTLE).then(std::time::Instant::now);
         if self.integrate {
             self.initial_integrate();
         }
@@ -604,7 +620,7 @@ impl World {
                 m.translate(&d);
             }
         }
-        let t_check = probe.then(std::time::Instant::now);
+        let t_check = t0.is_some().then(std::time::Instant::now);
         self.neighbor_check()?;
         let check = t_check.map_or(std::time::Duration::ZERO, |t| t.elapsed());
         self.compute_forces(true)?;
@@ -627,78 +643,88 @@ impl World {
         Ok(())
     }
 
-    /// Keeps a pool worker awake until this step's first threaded pass starts. Between two
-    /// steps' threaded passes lies the serial part of a step (integration, neighbour check, wall
-    /// scan: tens of microseconds on a small packing), long enough for an idle rayon worker to go
-    /// to sleep; the threaded pass then waited for it to be woken, which cost as much as it saved
-    /// on the 514-particle hydrogel deck. Spawned at the start of the step, this job wakes the
-    /// worker while the serial part runs and spins until `pool_go` is set (the first threaded
-    /// pass sets it, and the pair pass in any case) or 0.5 ms have passed (a step that long pays
-    /// for a wake-up), so the pass finds the worker awake.
-    ///
-    /// Only when the stepping thread is itself a pool worker (`mcdem run` steps inside the pool):
-    /// from outside, a threaded pass hands all of its work to the pool and both workers must be
-    /// awake, which one warm-up job does not achieve. A job that no worker has taken yet (all busy
-    /// with other work) is not joined by another one. Each spawn allocates the small job record.
-    fn warm_up_pool(&self) {
-        if rayon::current_thread_index().is_none()
-            || rayon::current_num_threads() < 2
-            || self.pairs.len() < 2 * MIN_BLOCK_PAIRS
-            || self.warm_up_queued.swap(true, Ordering::AcqRel)
-        {
-            return;
+    /// The team of the threaded passes when this step uses threads and there are several to use
+    /// (as many members as the rayon pool the step runs in has threads), started on first use.
+    fn threads(&mut self) -> Option<&Team> {
+        let size = rayon::current_num_threads();
+        if !self.parallel || size < 2 {
+            return None;
         }
-        self.pool_go.store(false, Ordering::Relaxed);
-        let (go, queued) = (Arc::clone(&self.pool_go), Arc::clone(&self.warm_up_queued));
-        rayon::spawn(move || {
-            queued.store(false, Ordering::Release);
-            let t = std::time::Instant::now();
-            'spin: loop {
-                for _ in 0..64 {
-                    if go.load(Ordering::Acquire) {
-                        break 'spin;
-                    }
-                    std::hint::spin_loop();
-                }
-                if t.elapsed() > WARM_UP {
-                    break;
-                }
-            }
-        });
+        if self.team.as_ref().is_none_or(|t| t.size() != size) {
+            self.team = Some(Team::new(size));
+        }
+        self.team.as_ref()
     }
 
+    /// First half of velocity Verlet: half-kick, drift, rotational half-kick. On the team's
+    /// threads each member moves its own range of particles (the range it will also finish and,
+    /// roughly, the particles of its pair block): a particle's state then stays in one core's
+    /// cache from step to step instead of travelling between them.
     fn initial_integrate(&mut self) {
-        let dtf = 0.5 * self.dt;
-        let dtv = self.dt;
+        let (dtf, dtv) = (0.5 * self.dt, self.dt);
         let dtfrot = dtf / INERTIA;
+        let n = self.p.len();
         let p = &mut self.p;
-        for i in 0..p.x.len() {
-            let dtfm = dtf / p.mass[i];
-            p.v[i] += dtfm * p.f[i];
-            p.x[i] += dtv * p.v[i];
-            let dtirot = dtfrot / (p.radius[i] * p.radius[i] * p.mass[i]);
-            p.omega[i] += dtirot * p.torque[i];
+        let (f, torque, mass, radius) = (&p.f, &p.torque, &p.mass, &p.radius);
+        let kick = |r: Range<usize>, x: &mut [Vec3], v: &mut [Vec3], omega: &mut [Vec3]| {
+            for (i, ((x, v), omega)) in r.zip(x.iter_mut().zip(v.iter_mut()).zip(omega.iter_mut())) {
+                let dtfm = dtf / mass[i];
+                *v += dtfm * f[i];
+                *x += dtv * *v;
+                let dtirot = dtfrot / (radius[i] * radius[i] * mass[i]);
+                *omega += dtirot * torque[i];
+            }
+        };
+        match self.team.as_ref().filter(|_| self.parallel) {
+            Some(team) => {
+                let (xs, vs, os) = (SplitMut::new(&mut p.x), SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
+                let size = team.size();
+                team.run(|k| {
+                    let r = share(n, size, k);
+                    // SAFETY: `share` gives each member its own range of particles.
+                    let (x, v, o) = unsafe { (xs.range(r.clone()), vs.range(r.clone()), os.range(r.clone())) };
+                    kick(r, x, v, o);
+                    Ok::<(), ()>(())
+                })
+                .expect("the half-kick cannot fail");
+            }
+            None => kick(0..n, &mut p.x, &mut p.v, &mut p.omega),
         }
     }
 
+    /// Second half-kick of velocity Verlet (on the team's threads as [`World::initial_integrate`]);
+    /// stops at the first particle (lowest index) whose position or velocity is not finite.
     fn final_integrate(&mut self) -> Result<(), StepError> {
         let dtf = 0.5 * self.dt;
         let dtfrot = dtf / INERTIA;
+        let (n, step) = (self.p.len(), self.step);
         let p = &mut self.p;
-        for i in 0..p.x.len() {
-            let dtfm = dtf / p.mass[i];
-            p.v[i] += dtfm * p.f[i];
-            let dtirot = dtfrot / (p.radius[i] * p.radius[i] * p.mass[i]);
-            p.omega[i] += dtirot * p.torque[i];
-            if !(p.x[i].iter().all(|c| c.is_finite()) && p.v[i].iter().all(|c| c.is_finite())) {
-                return Err(StepError {
-                    step: self.step,
-                    particle: p.id[i],
-                    cause: "position or velocity is not finite".into(),
-                });
+        let (f, torque, mass, radius, x, id) = (&p.f, &p.torque, &p.mass, &p.radius, &p.x, &p.id);
+        let kick = |r: Range<usize>, v: &mut [Vec3], omega: &mut [Vec3]| {
+            for (i, (v, omega)) in r.zip(v.iter_mut().zip(omega.iter_mut())) {
+                let dtfm = dtf / mass[i];
+                *v += dtfm * f[i];
+                let dtirot = dtfrot / (radius[i] * radius[i] * mass[i]);
+                *omega += dtirot * torque[i];
+                if !(x[i].iter().all(|c| c.is_finite()) && v.iter().all(|c| c.is_finite())) {
+                    return Err(StepError { step, particle: id[i], cause: "position or velocity is not finite".into() });
+                }
             }
+            Ok(())
+        };
+        match self.team.as_ref().filter(|_| self.parallel) {
+            Some(team) => {
+                let (vs, os) = (SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
+                let size = team.size();
+                team.run(|k| {
+                    let r = share(n, size, k);
+                    // SAFETY: `share` gives each member its own range of particles.
+                    let (v, o) = unsafe { (vs.range(r.clone()), os.range(r.clone())) };
+                    kick(r, v, o)
+                })
+            }
+            None => kick(0..n, &mut p.v, &mut p.omega),
         }
-        Ok(())
     }
 
     /// Rebuilds the neighbour list when a pair could have closed the skin since the last build
@@ -832,19 +858,67 @@ impl World {
         self.threaded_passes
     }
 
-    /// Splits the pairs into `blocks` runs of [`block_len`] pairs and gives each particle to the
-    /// first block (in pair order) with a pair on it; particles on no pair get `u16::MAX` (nobody writes them).
+    /// Splits the pairs into `blocks` equal runs ([`share`]) and gives each particle to the
+    /// first block (in pair order) with a pair on it ([`World::own_blocks`]).
+    fn assign_owners(&mut self, blocks: usize) {
+        let np = self.pairs.len();
+        self.pair_cuts.clear();
+        self.pair_cuts.extend((0..blocks).map(|b| share(np, blocks, b).start));
+        self.pair_cuts.push(np);
+        self.block_ns.clear();
+        self.block_ns.resize(blocks, 0);
+        self.block_passes = 0;
+        self.own_blocks();
+    }
+
+    /// Moves the block boundaries so that each member's share of the pairs is proportional to
+    /// the rate at which it evaluated them over the last [`BALANCE_PASSES`] passes (equal runs of
+    /// pairs need not cost the same: touching pairs cost more than those apart, and the data a
+    /// member reads may sit in the other core's cache), and reassigns the owners if a boundary
+    /// moved by more than 1 % of the pairs. Where the boundaries lie changes nothing in the
+    /// results: every particle still receives its terms in pair order.
+    fn balance_blocks(&mut self) {
+        let np = self.pairs.len();
+        let blocks = self.pair_cuts.len() - 1;
+        let rate = |b: usize| {
+            let len = (self.pair_cuts[b + 1] - self.pair_cuts[b]) as f64;
+            len / (self.block_ns[b].max(1) as f64)
+        };
+        let total: f64 = (0..blocks).map(rate).sum();
+        if !(total.is_finite() && total > 0.0) {
+            return;
+        }
+        // Half-way to the balanced boundaries each time: the times are noisy. (A short list,
+        // every BALANCE_PASSES passes.)
+        let mut cuts = self.pair_cuts.clone();
+        let mut acc = 0.0;
+        for b in 1..blocks {
+            acc += rate(b - 1) / total;
+            let target = 0.5 * (self.pair_cuts[b] as f64 + acc * np as f64);
+            cuts[b] = (target.round() as usize).clamp(cuts[b - 1], np);
+        }
+        self.block_ns.iter_mut().for_each(|t| *t = 0);
+        self.block_passes = 0;
+        if cuts.iter().zip(&self.pair_cuts).any(|(a, b)| a.abs_diff(*b) * 100 > np) {
+            self.pair_cuts = cuts;
+            self.own_blocks();
+        }
+    }
+
+    /// Gives each particle to the first block (in pair order, blocks as in `pair_cuts`) with a
+    /// pair on it; particles on no pair get `u16::MAX` (nobody writes them).
     /// Every contribution a particle receives from its owner comes before any from later blocks,
     /// so the owner may add straight into the sums while later blocks defer theirs: the threaded
     /// pass then adds in exactly the serial order. With the particles sorted in space, only a
     /// thin layer at each block boundary is shared.
-    fn assign_owners(&mut self, blocks: usize) {
-        let (n, np) = (self.p.len(), self.pairs.len());
+    fn own_blocks(&mut self) {
+        let (n, np, blocks) = (self.p.len(), self.pairs.len(), self.pair_cuts.len() - 1);
         self.owner.clear();
         self.owner.resize(n, u16::MAX);
         self.deferred.resize_with(blocks, Vec::new);
         let mut shared = 0;
-        for (b, block) in self.pairs.chunks(block_len(np, blocks)).enumerate() {
+        for b in 0..blocks {
+            let block = &self.pairs[self.pair_cuts[b]..self.pair_cuts[b + 1]];
             let before = shared;
             for pr in block {
                 for a in [pr.i as usize, pr.j as usize] {
@@ -1140,6 +1214,7 @@ impl World {
         // The kernel particle by particle into one Δ per slot (threads on disjoint particle
         // ranges when they pay), then Δ to the pairs and wall contacts.
         self.slot_dr.resize(self.slots.len(), 0.0);
+        let threaded = n >= 2 * MC_GRAIN && self.threads().is_some();
         let ctx = McCtx {
             p: &self.p,
             mc_types: &self.mc_types,
@@ -1149,11 +1224,6 @@ impl World {
             wc: &self.wc,
             step: self.step,
         };
-        let parallel = self.parallel && n >= 2 * MC_GRAIN && rayon::current_num_threads() > 1;
-        if parallel {
-            // The warm-up job holds the worker this pass is for.
-            self.pool_go.store(true, Ordering::Release);
-        }
         let (tolerance, kept) = match self.mc_cache.as_mut() {
             Some(c) => {
                 let (t, k) = c.slots_mut(n);
@@ -1161,7 +1231,10 @@ impl World {
             }
             None => (0.0, None),
         };
-        let counts = ctx.kernel(0, n, &mut self.slot_dr, kept, tolerance, parallel)?;
+        let counts = match self.team.as_ref().filter(|_| threaded) {
+            Some(team) => ctx.kernel_on(team, &mut self.slot_dr, kept, tolerance)?,
+            None => ctx.kernel(0, n, &mut self.slot_dr, kept, tolerance)?,
+        };
         self.mc_kernel_contacts += counts.contacts;
         self.mc_kernel_fallbacks += counts.fallbacks;
         if let Some(c) = self.mc_cache.as_mut() {
@@ -1182,10 +1255,8 @@ impl World {
     fn compute_forces(&mut self, update: bool) -> Result<(), StepError> {
         let n = self.p.len();
         let domain = self.domain.expect("domain checked in setup");
-        for i in 0..n {
-            self.p.f[i] = Vec3::zeros();
-            self.p.torque[i] = Vec3::zeros();
-        }
+        // Every pass below writes the per-particle sums from zero (the pair pass into spare
+        // buffers, swapped in): no clearing here.
         // LIGGGHTS does not clear the mesh force before the set-up pass, so the first thermo line
         // of a run shows the previous step's force plus the set-up force; do the same so the
         // outputs match line by line (the dynamics never read this sum).
@@ -1203,13 +1274,18 @@ impl World {
         let nt = self.ntypes;
         // Threads, when the timing probe says they pay: one block of pairs each (more blocks
         // share more particles, whose sums are deferred), none below two blocks' worth of pairs.
-        let threads = rayon::current_num_threads();
+        let threads = self.threads().map_or(1, Team::size);
         let blocks = threads.min(self.pairs.len() / MIN_BLOCK_PAIRS).min(MAX_PAIR_BLOCKS);
-        let threaded = self.parallel && threads > 1 && blocks > 1;
-        // Threaded or not, the warm-up job has served its purpose (or would spin in vain).
-        self.pool_go.store(true, Ordering::Release);
+        let threaded = threads > 1 && blocks > 1;
         if threaded && self.owner_key != Some((self.pairs.len(), blocks, n)) {
             self.assign_owners(blocks);
+        }
+        if threaded
+            && !self.owned_blocks_pay
+            && (self.inc_start.len() != n + 1 || self.inc.len() != 2 * self.pairs.len())
+        {
+            // After every neighbour build, and when particles were added since.
+            self.build_incidence();
         }
         // Pairs: in pair order, or in blocks on the threads that add in that same order
         // (`assign_owners`), so the sums are bit-identical whatever the number of threads.
@@ -1239,38 +1315,61 @@ impl World {
             self.pair_force.resize(np, Vec3::zeros());
         }
         if threaded && self.owned_blocks_pay {
-            use rayon::prelude::*;
             self.threaded_passes.0 += 1;
+            let team = self.team.as_ref().expect("threads() started the team");
             let (f, torque) = (&mut self.f_buf, &mut self.t_buf);
-            f.clear();
             f.resize(n, Vec3::zeros());
-            torque.clear();
             torque.resize(n, Vec3::zeros());
+            {
+                // Cleared by the members, each its own particles: the lines then sit in the
+                // cache of the core that adds into most of them next.
+                let (fs, ts, size) = (SplitMut::new(f), SplitMut::new(torque), team.size());
+                team.run(|k| {
+                    let r = share(n, size, k);
+                    // SAFETY: `share` gives each member its own range of particles.
+                    unsafe { (fs.range(r.clone()).fill(Vec3::zeros()), ts.range(r).fill(Vec3::zeros())) };
+                    Ok::<(), ()>(())
+                })
+                .expect("clearing cannot fail");
+            }
             let sums = SharedSums { f: f.as_mut_ptr(), torque: torque.as_mut_ptr(), n };
             // Every list emptied first: a block without pairs (fewer runs than blocks) adds none.
             self.deferred.iter_mut().for_each(Vec::clear);
-            // One work item per block: its pairs, radius changes, recorded forces and deferrals.
-            let (size, owner) = (block_len(np, blocks), &self.owner);
-            self.pairs
-                .par_chunks_mut(size)
-                .zip(self.pair_dr.par_chunks(size))
-                .zip(self.pair_force.par_chunks_mut(size))
-                .zip(self.deferred.par_iter_mut())
-                .enumerate()
-                .try_for_each(|(b, (((prs, drs), force), deferred))| {
-                    let mut sink = OwnedSums { sums, owner, block: b as u16, deferred, force };
-                    if batched {
-                        ctx.eval_batched(prs, drs, &mut sink)
-                    } else {
-                        let mut o = PairOut::default();
-                        for (k, (pr, dr)) in prs.iter_mut().zip(drs).enumerate() {
-                            ctx.eval(pr, *dr, &mut o)?;
-                            sink.put(k, pr.i as usize, pr.j as usize, &o);
-                        }
+            // Member b takes block b: its pairs, radius changes, recorded forces and deferrals,
+            // and times itself for `balance_blocks`.
+            let (owner, cuts) = (&self.owner, &self.pair_cuts);
+            let (pairs, forces) = (SplitMut::new(&mut self.pairs), SplitMut::new(&mut self.pair_force));
+            let deferred = SplitMut::new(&mut self.deferred[..blocks]);
+            let block_ns = SplitMut::new(&mut self.block_ns[..blocks]);
+            let drs = &self.pair_dr;
+            team.run(|b| {
+                if b >= blocks {
+                    return Ok(());
+                }
+                let t0 = std::time::Instant::now();
+                let r = cuts[b]..cuts[b + 1];
+                // SAFETY: the cuts do not decrease, so each member has its own range of pairs,
+                // and its own block.
+                let (prs, force, deferred, ns) = unsafe {
+                    let d = &mut deferred.range(b..b + 1)[0];
+                    (pairs.range(r.clone()), forces.range(r.clone()), d, &mut block_ns.range(b..b + 1)[0])
+                };
+                let drs = &drs[r];
+                let mut sink = OwnedSums { sums, owner, block: b as u16, deferred, force };
+                let res = if batched {
+                    ctx.eval_batched(prs, drs, &mut sink)
+                } else {
+                    let mut o = PairOut::default();
+                    prs.iter_mut().zip(drs).enumerate().try_for_each(|(k, (pr, dr))| {
+                        ctx.eval(pr, *dr, &mut o)?;
+                        sink.put(k, pr.i as usize, pr.j as usize, &o);
                         Ok(())
-                    }
-                })
-                .map_err(|e| *e)?;
+                    })
+                };
+                *ns += t0.elapsed().as_nanos() as u64;
+                res
+            })
+            .map_err(|e| *e)?;
             // Later blocks' contributions to shared particles, in block then pair order: the
             // serial pass's order.
             for d in self.deferred.iter().flatten() {
@@ -1279,68 +1378,68 @@ impl World {
             }
             std::mem::swap(&mut self.p.f, &mut self.f_buf);
             std::mem::swap(&mut self.p.torque, &mut self.t_buf);
+            // After the deferred ends are added: a new assignment clears their lists.
+            self.block_passes += 1;
+            if self.block_passes >= BALANCE_PASSES {
+                self.balance_blocks();
+            }
         } else if threaded {
-            use rayon::prelude::*;
             self.threaded_passes.1 += 1;
             if self.pair_out.len() != np {
                 self.pair_out.resize(np, PairOut::default());
             }
-            let chunks = self
-                .pairs
-                .par_chunks_mut(PARALLEL_CHUNK)
-                .zip(self.pair_dr.par_chunks(PARALLEL_CHUNK))
-                .zip(self.pair_out.par_chunks_mut(PARALLEL_CHUNK))
-                .zip(self.pair_force.par_chunks_mut(PARALLEL_CHUNK));
-            if batched {
-                chunks
-                    .try_for_each(|(((prs, drs), outs), force)| {
-                        ctx.eval_batched(prs, drs, &mut Keep { outs, force })
-                    })
-                    .map_err(|e| *e)?;
-            } else {
-                chunks
-                    .try_for_each(|(((prs, drs), outs), force)| {
-                        let mut keep = Keep { outs, force };
-                        for (k, (pr, dr)) in prs.iter_mut().zip(drs).enumerate() {
-                            let mut o = PairOut::default();
-                            ctx.eval(pr, *dr, &mut o)?;
-                            keep.put(k, pr.i as usize, pr.j as usize, &o);
-                        }
-                        Ok(())
-                    })
-                    .map_err(|e: Box<StepError>| *e)?;
-            }
-            if self.inc_start.len() != n + 1 || self.inc.len() != 2 * self.pairs.len() {
-                // After every neighbour build, and when particles were added since.
-                self.build_incidence();
+            let team = self.team.as_ref().expect("threads() started the team");
+            let size = team.size();
+            {
+                let (pairs, outs) = (SplitMut::new(&mut self.pairs), SplitMut::new(&mut self.pair_out));
+                let forces = SplitMut::new(&mut self.pair_force);
+                let drs = &self.pair_dr;
+                team.run(|k| {
+                    let r = share(np, size, k);
+                    // SAFETY: `share` gives each member its own range of pairs.
+                    let (prs, outs, force) =
+                        unsafe { (pairs.range(r.clone()), outs.range(r.clone()), forces.range(r.clone())) };
+                    let drs = &drs[r];
+                    let mut keep = Keep { outs, force };
+                    if batched {
+                        return ctx.eval_batched(prs, drs, &mut keep);
+                    }
+                    for (k, (pr, dr)) in prs.iter_mut().zip(drs).enumerate() {
+                        let mut o = PairOut::default();
+                        ctx.eval(pr, *dr, &mut o)?;
+                        keep.put(k, pr.i as usize, pr.j as usize, &o);
+                    }
+                    Ok(())
+                })
+                .map_err(|e| *e)?;
             }
             // Each particle sums its own pairs' results in pair order, as the serial pass adds
             // them (from zero: the sums were cleared above): no write is shared between threads.
             let (start, inc, outs) = (&self.inc_start, &self.inc, &self.pair_out);
-            self.p
-                .f
-                .par_chunks_mut(PARALLEL_CHUNK)
-                .zip(self.p.torque.par_chunks_mut(PARALLEL_CHUNK))
-                .enumerate()
-                .for_each(|(c, (fs, ts))| {
-                    for (o, (f, t)) in fs.iter_mut().zip(ts.iter_mut()).enumerate() {
-                        let i = c * PARALLEL_CHUNK + o;
-                        let (mut fa, mut ta) = (*f, *t);
-                        for &e in &inc[start[i] as usize..start[i + 1] as usize] {
-                            let out = &outs[(e >> 1) as usize];
-                            if out.touching {
-                                if e & 1 == 0 {
-                                    fa += out.force;
-                                    ta += out.torque_i;
-                                } else {
-                                    fa -= out.force;
-                                    ta += out.torque_j;
-                                }
+            let (fs, ts) = (SplitMut::new(&mut self.p.f), SplitMut::new(&mut self.p.torque));
+            team.run(|k| {
+                let r = share(n, size, k);
+                // SAFETY: `share` gives each member its own range of particles.
+                let (fs, ts) = unsafe { (fs.range(r.clone()), ts.range(r.clone())) };
+                for (i, (f, t)) in r.zip(fs.iter_mut().zip(ts.iter_mut())) {
+                    let (mut fa, mut ta) = (Vec3::zeros(), Vec3::zeros());
+                    for &e in &inc[start[i] as usize..start[i + 1] as usize] {
+                        let out = &outs[(e >> 1) as usize];
+                        if out.touching {
+                            if e & 1 == 0 {
+                                fa += out.force;
+                                ta += out.torque_i;
+                            } else {
+                                fa -= out.force;
+                                ta += out.torque_j;
                             }
                         }
-                        (*f, *t) = (fa, ta);
                     }
-                });
+                    (*f, *t) = (fa, ta);
+                }
+                Ok::<(), ()>(())
+            })
+            .expect("the per-particle sums cannot fail");
         } else {
             // The threaded passes add in this order too: identical sums.
             let (f, torque) = (&mut self.f_buf, &mut self.t_buf);
@@ -1361,8 +1460,10 @@ impl World {
             std::mem::swap(&mut self.p.f, &mut self.f_buf);
             std::mem::swap(&mut self.p.torque, &mut self.t_buf);
         }
-        // Body forces come next, then the walls (the order of the example decks' fixes).
-        if let Some(g) = self.gravity {
+        // Body forces come next, then the walls (the order of the example decks' fixes); with
+        // threads, each member adds both to its own particles (below).
+        let walls_threaded = threads > 1 && self.wc.len() >= MIN_THREADED_WALL_CONTACTS;
+        if let Some(g) = self.gravity.filter(|_| !walls_threaded) {
             for i in 0..n {
                 self.p.f[i] += self.p.mass[i] * g;
             }
@@ -1391,26 +1492,41 @@ impl World {
         if self.wall_force.len() != self.wc.len() {
             self.wall_force.resize(self.wc.len(), Vec3::zeros());
         }
-        let (f, torque) = (&mut self.p.f[..], &mut self.p.torque[..]);
-        let split = if self.parallel && self.wc.len() >= MIN_THREADED_WALL_CONTACTS && threads > 1 {
-            let mut mid = self.wc.len() / 2;
-            let ip = self.wc[mid].p;
-            while mid > 0 && self.wc[mid - 1].p == ip {
-                mid -= 1;
+        if walls_threaded {
+            // Member k's contacts start at its equal share's start moved back to the first
+            // contact of that particle, its particles at that contact's (0 for the first member,
+            // n after the last): non-decreasing in k, since the contacts are in particle order.
+            let (wc, cuts) = (&self.wc, &mut self.wall_cuts);
+            cuts.clear();
+            cuts.extend((0..threads).map(|k| {
+                let mut c = share(wc.len(), threads, k).start;
+                while c > 0 && c < wc.len() && wc[c - 1].p == wc[c].p {
+                    c -= 1;
+                }
+                [c, if k == 0 { 0 } else { wc.get(c).map_or(n, |w| w.p as usize) }]
+            }));
+            cuts.push([wc.len(), n]);
+        }
+        match self.team.as_ref().filter(|_| walls_threaded) {
+            Some(team) => {
+                let (cuts, gravity, mass) = (&self.wall_cuts, self.gravity, &self.p.mass);
+                let (cs, wf) = (SplitMut::new(&mut self.wc), SplitMut::new(&mut self.wall_force));
+                let (fs, ts) = (SplitMut::new(&mut self.p.f), SplitMut::new(&mut self.p.torque));
+                team.run(|k| {
+                    let ([c0, p0], [c1, p1]) = (cuts[k], cuts[k + 1]);
+                    // SAFETY: the cuts do not decrease with k, so the members' ranges of
+                    // contacts and of particles are disjoint.
+                    let (c, w, f, t) =
+                        unsafe { (cs.range(c0..c1), wf.range(c0..c1), fs.range(p0..p1), ts.range(p0..p1)) };
+                    if let Some(g) = gravity {
+                        for (fi, m) in f.iter_mut().zip(&mass[p0..p1]) {
+                            *fi += *m * g;
+                        }
+                    }
+                    ctx.forces(c, w, f, t, p0)
+                })?;
             }
-            (mid > 0).then_some((mid, ip as usize))
-        } else {
-            None
-        };
-        match split {
-            Some((mid, ip)) => {
-                let (wa, wb) = self.wc.split_at_mut(mid);
-                let (fa, fb) = self.wall_force.split_at_mut(mid);
-                let ((f0, f1), (t0, t1)) = (f.split_at_mut(ip), torque.split_at_mut(ip));
-                let (a, b) = rayon::join(|| ctx.forces(wa, fa, f0, t0, 0), || ctx.forces(wb, fb, f1, t1, ip));
-                a.and(b)?;
-            }
-            None => ctx.forces(&mut self.wc, &mut self.wall_force, f, torque, 0)?,
+            None => ctx.forces(&mut self.wc, &mut self.wall_force, &mut self.p.f, &mut self.p.torque, 0)?,
         }
         for (c, wf) in self.wc.iter().zip(&self.wall_force) {
             if let WallGeom::Meshes(_) = self.walls[c.wall as usize].geom {
@@ -1596,28 +1712,25 @@ const RECEIVER_GAP: f64 = 0.1;
 const TUNE_PERIOD: u64 = 5000;
 const TUNE_WINDOW: u64 = 50;
 const TUNE_SLICE: u64 = 10;
+/// Steps at the start of each probe slice that are not timed.
+const TUNE_SETTLE: u64 = 2;
 
 /// Steps after which the first serial-vs-threads probe has decided (benchmarks warm up this long).
 pub const THREAD_PROBE_STEPS: u64 = 2 * TUNE_WINDOW;
 
-/// Pairs per parallel work item of the threaded pass that keeps every pair's result.
-const PARALLEL_CHUNK: usize = 256;
 
 /// Fewest pairs in a block of the threaded pair pass, and most blocks (block indices are kept
 /// in a `u16` per particle).
 const MIN_BLOCK_PAIRS: usize = 512;
 const MAX_PAIR_BLOCKS: usize = 64;
 
+/// Owning threaded pair passes between two rebalancings of their blocks ([`World::balance_blocks`]).
+const BALANCE_PASSES: u32 = 200;
+
 /// Fewest wall contacts worth a threaded wall pass.
 const MIN_THREADED_WALL_CONTACTS: usize = 64;
 
-/// Longest a warm-up job keeps a pool worker spinning ([`World::warm_up_pool`]).
-const WARM_UP: std::time::Duration = std::time::Duration::from_micros(500);
 
-/// Pairs per block when `np` pairs are split into `blocks` runs (the last may be shorter).
-fn block_len(np: usize, blocks: usize) -> usize {
-    np.div_ceil(blocks).max(1)
-}
 
 /// Read-only view of the state that one pair evaluation needs (shared between threads).
 struct PairCtx<'a> {
@@ -2145,11 +2258,48 @@ struct McCtx<'a> {
 }
 
 impl McCtx<'_> {
+    /// [`McCtx::kernel`] of all particles on the members of `team`, each on a consecutive range
+    /// of particles with about equal numbers of contacts (the kernel's cost grows with them).
+    /// Every particle's result is the one of a serial pass, and of several failures the lowest
+    /// particle's is reported (the lowest member's, whose range comes first).
+    fn kernel_on(
+        &self,
+        team: &Team,
+        dr: &mut [f64],
+        kept: Option<&mut [KeptInfluence]>,
+        tolerance: f64,
+    ) -> Result<McCounts, StepError> {
+        let n = self.slot_start.len() - 1;
+        let (size, total) = (team.size(), self.slot_start[n] as usize);
+        debug_assert_eq!(self.slot_start[0], 0);
+        let cut = |k: usize| {
+            if k >= size {
+                n
+            } else {
+                self.slot_start[..n].partition_point(|&s| (s as usize) * size < k * total)
+            }
+        };
+        let (dr, kept) = (SplitMut::new(dr), kept.map(SplitMut::new));
+        let counts = Mutex::new(McCounts::default());
+        team.run(|k| {
+            let (lo, hi) = (cut(k), cut(k + 1));
+            let slots = self.slot_start[lo] as usize..self.slot_start[hi] as usize;
+            // SAFETY: `cut` does not decrease with k, so the members' particle ranges lo..hi are
+            // disjoint, and with them their slots and kept matrices.
+            let (d, kp) = unsafe { (dr.range(slots), kept.as_ref().map(|v| v.range(lo..hi))) };
+            let c = self.kernel(lo, hi, d, kp, tolerance)?;
+            let mut sum = counts.lock().unwrap_or_else(|p| p.into_inner());
+            sum.contacts += c.contacts;
+            sum.fallbacks += c.fallbacks;
+            sum.recomputed += c.recomputed;
+            Ok(())
+        })?;
+        Ok(counts.into_inner().unwrap_or_else(|p| p.into_inner()))
+    }
+
     /// Radius changes of particles lo..hi into `dr` (exactly their slots), kept matrices in
-    /// `kept` (exactly those particles) under a geometry tolerance. With `parallel` the range is
-    /// halved recursively over the rayon threads; every particle's result is the same either
-    /// way, and of several failures the lowest particle's is reported (the lower half's comes
-    /// first), as in a serial pass.
+    /// `kept` (exactly those particles) under a geometry tolerance; of several failures the
+    /// lowest particle's is reported.
     fn kernel(
         &self,
         lo: usize,
@@ -2157,31 +2307,7 @@ impl McCtx<'_> {
         dr: &mut [f64],
         kept: Option<&mut [KeptInfluence]>,
         tolerance: f64,
-        parallel: bool,
     ) -> Result<McCounts, StepError> {
-        if parallel && hi - lo > MC_GRAIN {
-            let mid = lo + (hi - lo) / 2;
-            let (dl, dh) = dr.split_at_mut((self.slot_start[mid] - self.slot_start[lo]) as usize);
-            let (kl, kh) = match kept {
-                Some(k) => {
-                    let (a, b) = k.split_at_mut(mid - lo);
-                    (Some(a), Some(b))
-                }
-                None => (None, None),
-            };
-            let (a, b) = rayon::join(
-                || self.kernel(lo, mid, dl, kl, tolerance, true),
-                || self.kernel(mid, hi, dh, kh, tolerance, true),
-            );
-            return match (a, b) {
-                (Ok(a), Ok(b)) => Ok(McCounts {
-                    contacts: a.contacts + b.contacts,
-                    fallbacks: a.fallbacks + b.fallbacks,
-                    recomputed: a.recomputed + b.recomputed,
-                }),
-                (Err(e), _) | (Ok(_), Err(e)) => Err(e),
-            };
-        }
         MC_SCRATCH.with(|buf| {
             let (loads, fb_buf) = &mut *buf.borrow_mut();
             let mut counts = McCounts::default();
