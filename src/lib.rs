@@ -17,4 +17,5 @@ pub mod nonlocal;
 pub mod outputs;
 pub mod physics;
 pub mod study;
+pub mod team;
 pub mod validate;

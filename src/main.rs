@@ -452,9 +452,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Contacts { file } => contacts(&file),
         Command::Validate { quick, cases, out } => validate(quick, cases, out),
-        // The time loop runs on a worker of the thread pool: the pair loop's parallel halves then
-        // start on this thread while the other worker is still spinning from the previous step,
-        // instead of a blocked caller waking sleeping workers every step.
+        // The time loop runs on a worker of the thread pool, whose size (RAYON_NUM_THREADS, else
+        // the cores) sets the members of the engine's team of threads.
         Command::Run { deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every, threads_mode } => {
             let opts = RunFlags { no_progress, mc_geometry_tolerance, mc_update_every, threads_mode };
             rayon::scope(|_| run(deck, var, log, opts))

@@ -233,3 +233,36 @@ fn deck_failures_say_whether_the_engine_stopped() {
     assert!(e.instability.is_none(), "{e}");
     assert!(e.message.contains("in.broken:") && e.message.contains("frobnicate"), "{e}");
 }
+
+/// `--threads-mode` fixes the choice the timing probe otherwise makes; a bad value is refused by
+/// name, and on the hydrogel deck (514 spheres, walls and a mesh piston: every threaded pass runs)
+/// the piston force on two forced threads is the serial one, byte for byte.
+#[test]
+fn threads_mode_is_checked_and_changes_no_result() {
+    let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--threads-mode", "sometimes"]);
+    assert!(!ok && out.contains("invalid value 'sometimes' for '--threads-mode"), "{out}");
+    let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--threads-mode", "parallel"]);
+    assert!(ok, "{out}");
+    let data = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact/data/input.data";
+    if !std::path::Path::new(data).exists() {
+        eprintln!("skipped the hydrogel part: needs the liggghts-doc example data");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let decks = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs");
+    let piston = |mode: &str| {
+        let out = dir.path().join(format!("piston_{mode}.txt"));
+        let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+            .env("RAYON_NUM_THREADS", "2")
+            .args(["run", decks.join("hydrogel.in").to_str().unwrap(), "--threads-mode", mode, "-log", "none"])
+            .args(["-var", "stroke", "600", "-var", "strokes", "2", "-var", "every", "10"])
+            .args(["-var", "dir", decks.to_str().unwrap(), "-var", "out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{mode}: {}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let serial = piston("serial");
+    assert!(serial.len() > 1000, "piston output too short");
+    assert!(piston("parallel") == serial, "two forced threads changed the piston force");
+}

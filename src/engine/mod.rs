@@ -11,7 +11,6 @@
 
 pub mod mesh;
 pub mod neighbor;
-pub mod team;
 
 use std::cell::RefCell;
 use std::fmt;
@@ -29,7 +28,7 @@ use crate::physics::{Material, PairCoeffs, Vec3};
 
 pub use mesh::Mesh;
 use neighbor::CellList;
-use team::{share, SplitMut, Team};
+use crate::team::{share, SplitMut, Team};
 
 /// Moment of inertia prefactor of a solid sphere, I = 0.4 m r² (as LIGGGHTS `nve/sphere`).
 const INERTIA: f64 = 0.4;
@@ -469,8 +468,8 @@ pub struct World {
     parallel: bool,
     tune_ser_ns: u64,
     tune_par_ns: u64,
-    /// Whether a step's force passes (pairs, walls, multi-contact kernel) use the thread pool
-    /// (default: decided by the timing probe).
+    /// Whether a step's force passes (pairs, walls, multi-contact kernel) and half-kicks run on
+    /// the threads' team (default: decided by the timing probe).
     pub pair_threads: PairThreads,
     /// The threads of the threaded passes (`rayon::current_num_threads()` members, started at
     /// the first threaded step and kept for the run).
@@ -481,7 +480,8 @@ pub struct World {
 }
 
 /// Whether the force passes of a step (pairs, wall contacts, the multi-contact kernel) run on the
-/// thread pool. The results are bit-identical either way (every sum is taken in the serial order),
+/// threads' team ([`Team`], as many members as the rayon pool the step runs in has threads).
+/// The results are bit-identical either way (every sum is taken in the serial order),
 /// so this only decides speed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum PairThreads {

@@ -38,6 +38,7 @@ use faer::Mat;
 use super::kernel::{BoundKernel, Kernel};
 use crate::physics::material::{Material, PairCoeffs};
 use crate::physics::Vec3;
+use crate::team::{share, SplitMut, Team};
 
 /// Smallest reference force for the relative force-balance residual, in units of E_ref·L².
 /// 1e-9 E_ref·L² is the Hertz force of an overlap of about 1e-6 radii: below it a packing is
@@ -53,18 +54,22 @@ const FIRE_STALL_DT: f64 = 1e-4;
 /// ... and the residual has not reached a new low (by 1 %) for this many steps.
 const FIRE_STALL_STEPS: usize = 2000;
 
-/// FIRE's force evaluation on the rayon pool: contacts per work item at least, and particles per
-/// block of kernel sums. A step of the 514-particle compression has a few thousand candidates, so
-/// two threads get work items of tens of microseconds, well above the cost of handing them out.
-const FIRE_MIN_LEN: usize = 512;
-const FIRE_BLOCK: usize = 64;
+/// Fewest candidates (pairs and particle-wall contacts) for which FIRE's force evaluation uses
+/// the team of threads: a step of the 514-particle compression has a few thousand, so each of two
+/// members gets tens of microseconds of work, well above the cost of handing it out.
+const FIRE_MIN_LEN: usize = 1024;
 
 /// The buffers of [`Nonlocal::fire_forces`] that grow with the packing, kept across the steps of
-/// one relaxation instead of allocated every step. What a step still allocates is small: the list
-/// of particle blocks (one entry per [`FIRE_BLOCK`] particles) and one kernel-value buffer per
-/// parallel work item.
+/// one relaxation instead of allocated every step, and the relaxation's team of threads.
 #[derive(Default)]
 struct FireScratch {
+    /// The threads of the force evaluation (as many as the rayon pool the solver runs in has),
+    /// started by the first evaluation that is large enough.
+    team: Option<Team>,
+    /// A team of this thread alone, for evaluations too small to share.
+    solo: Option<Team>,
+    /// Per member of the team: the kernel values of one particle's contact pairs.
+    vals: Vec<Vec<f64>>,
     /// Per candidate: its geometry, if its gap may close.
     geo: Vec<Option<Geo>>,
     /// Loaded contacts per particle, compressed rows: (contact, direction from the particle).
@@ -1082,7 +1087,6 @@ impl Nonlocal {
         p_out: &mut [f64],
         d_out: &mut [f64],
     ) -> f64 {
-        use rayon::prelude::*;
         let n = x.len();
         let nw = self.walls.len();
         let np = candidates.len();
@@ -1094,15 +1098,35 @@ impl Nonlocal {
             }
         };
         let total = np + n * nw;
-        (0..total)
-            .into_par_iter()
-            .with_min_len(FIRE_MIN_LEN)
-            .map(|k| {
-                let (i, o) = other_of(k);
-                let g = self.geometry(x, i, o);
-                (g.gamma > -margin).then_some(g)
+        let threads = rayon::current_num_threads();
+        if total >= FIRE_MIN_LEN && threads > 1 && s.team.as_ref().is_none_or(|t| t.size() != threads) {
+            s.team = Some(Team::new(threads));
+        }
+        // Every pass below on the team's members, each on its own range (of candidates, or of
+        // particles), or on this thread alone: the same values either way.
+        let team = match s.team.as_ref().filter(|_| total >= FIRE_MIN_LEN && threads > 1) {
+            Some(t) => t,
+            None => s.solo.get_or_insert_with(|| Team::new(1)),
+        };
+        let size = team.size();
+        s.vals.resize_with(size, Vec::new);
+        s.geo.clear();
+        s.geo.resize(total, None);
+        {
+            let geo = SplitMut::new(&mut s.geo);
+            team.run(|m| {
+                let r = share(total, size, m);
+                // SAFETY: `share` gives each member its own range of candidates.
+                let out = unsafe { geo.range(r.clone()) };
+                for (k, g) in r.zip(out) {
+                    let (i, o) = other_of(k);
+                    let v = self.geometry(x, i, o);
+                    *g = (v.gamma > -margin).then_some(v);
+                }
+                Ok::<(), ()>(())
             })
-            .collect_into_vec(&mut s.geo);
+            .expect("the geometry cannot fail");
+        }
         let geo = &s.geo;
         // Per particle, in compressed rows: the loaded contacts of the previous step (index,
         // direction from the particle), in contact order.
@@ -1156,18 +1180,15 @@ impl Nonlocal {
         s.app_j.clear();
         if nonlocal {
             s.app.resize(adj.len(), 0.0);
-            // Rows in blocks of particles, each block writing its own entries.
-            let mut blocks: Vec<(usize, &mut [f64])> = Vec::with_capacity(n.div_ceil(FIRE_BLOCK));
-            let mut rest: &mut [f64] = &mut s.app;
-            for b in (0..n).step_by(FIRE_BLOCK) {
-                let end = (b + FIRE_BLOCK).min(n);
-                let (head, tail) = std::mem::take(&mut rest).split_at_mut(start[end] - start[b]);
-                blocks.push((b, head));
-                rest = tail;
-            }
-            blocks.into_par_iter().for_each_init(Vec::new, |vals: &mut Vec<f64>, (b, out)| {
+            // Each member the rows of its own range of particles, i.e. its own entries.
+            let (app, vals) = (SplitMut::new(&mut s.app), SplitMut::new(&mut s.vals));
+            team.run(|m| {
+                let ps = share(n, size, m);
+                // SAFETY: `share` gives each member its own particles, hence its own row entries,
+                // and its own value buffer.
+                let (out, vals) = unsafe { (app.range(start[ps.start]..start[ps.end]), &mut vals.range(m..m + 1)[0]) };
                 let mut at = 0;
-                for p in b..(b + FIRE_BLOCK).min(n) {
+                for p in ps {
                     let row = list(p);
                     let z = row.len();
                     vals.clear();
@@ -1185,7 +1206,9 @@ impl Nonlocal {
                     }
                     at += z;
                 }
-            });
+                Ok::<(), ()>(())
+            })
+            .expect("the kernel sums cannot fail");
             s.app_i.resize(total, 0.0);
             s.app_j.resize(total, 0.0);
             for p in 0..n {
@@ -1208,15 +1231,15 @@ impl Nonlocal {
         }
         // Each contact's overlap and force (d_out, p_out), then the sums in contact order.
         let (app_i, app_j, floor) = (&s.app_i, &s.app_j, &s.floor);
-        d_out[..total]
-            .par_iter_mut()
-            .zip(&mut p_out[..total])
-            .enumerate()
-            .with_min_len(FIRE_MIN_LEN)
-            .for_each(|(k, (d_out, p_out))| {
+        let (ds, ps) = (SplitMut::new(&mut d_out[..total]), SplitMut::new(&mut p_out[..total]));
+        team.run(|m| {
+            let r = share(total, size, m);
+            // SAFETY: `share` gives each member its own range of contacts.
+            let (ds, ps) = unsafe { (ds.range(r.clone()), ps.range(r.clone())) };
+            for (k, (d_out, p_out)) in r.zip(ds.iter_mut().zip(ps.iter_mut())) {
                 *p_out = 0.0;
                 *d_out = f64::NEG_INFINITY;
-                let Some(g) = &geo[k] else { return };
+                let Some(g) = &geo[k] else { continue };
                 let (i, o) = other_of(k);
                 let mut delta = g.gamma;
                 if nonlocal {
@@ -1231,7 +1254,7 @@ impl Nonlocal {
                         }
                         if most < 0.0 {
                             *d_out = most;
-                            return;
+                            continue;
                         }
                     }
                     delta -= if loaded { app_i[k] } else { approach(i, k, &g.e) };
@@ -1244,7 +1267,10 @@ impl Nonlocal {
                     let c = Contact { i, other: o, delta, k: self.stiffness(i, o) };
                     *p_out = Self::force_of(&c, delta).0;
                 }
-            });
+            }
+            Ok::<(), ()>(())
+        })
+        .expect("the contact forces cannot fail");
         s.f.clear();
         s.f.extend(self.body.iter().map(|b| b * self.body_factor));
         let (mut sum, mut cnt) = (0.0, 0usize);

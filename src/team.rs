@@ -1,5 +1,6 @@
-//! A fork-join team for the threaded force passes of a step: the stepping thread and `size − 1`
-//! helper threads that spin between jobs instead of going to sleep.
+//! A fork-join team for short, frequent parallel passes (the DEM's per-step force passes, the
+//! nonlocal solver's FIRE force evaluation): the calling thread and `size − 1` helper threads that
+//! spin between jobs instead of going to sleep.
 //!
 //! Why not rayon here: a step of a few hundred particles takes about 100 µs and has two or three
 //! threaded passes with serial work in between (integration, neighbour check, wall scan). Between
@@ -81,7 +82,7 @@ impl Team {
                 std::thread::Builder::new()
                     .name(format!("mcdem-team-{k}"))
                     .spawn(move || helper(&s, k))
-                    .expect("cannot start a thread of the force-pass team")
+                    .expect("cannot start a thread of the team")
             })
             .collect();
         Team { shared, helpers }
@@ -136,7 +137,7 @@ impl Team {
                 resume_unwind(p);
             }
             if s.panicked.swap(false, Ordering::SeqCst) {
-                panic!("a thread of the force-pass team panicked");
+                panic!("a thread of the team panicked");
             }
         }
         match first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
