@@ -569,10 +569,8 @@ impl World {
         // LIGGGHTS zeroes mesh node velocities at set-up (fix move/mesh sets them again in the
         // first step), so the set-up forces see resting meshes.
         // The threads' team is started here rather than inside the timing probe's first window.
-        if self.pair_threads != PairThreads::Serial && rayon::current_num_threads() > 1 {
-            let parallel = std::mem::replace(&mut self.parallel, true);
-            self.threads();
-            self.parallel = parallel;
+        if self.pair_threads != PairThreads::Serial {
+            self.start_team();
         }
         let vel: Vec<Vec3> = self.meshes.iter().map(|m| m.velocity).collect();
         self.meshes.iter_mut().for_each(|m| m.velocity = Vec3::zeros());
@@ -646,8 +644,16 @@ impl World {
     /// The team of the threaded passes when this step uses threads and there are several to use
     /// (as many members as the rayon pool the step runs in has threads), started on first use.
     fn threads(&mut self) -> Option<&Team> {
+        if !self.parallel {
+            return None;
+        }
+        self.start_team()
+    }
+
+    /// The team, started if there is none of the pool's size yet; none on a one-thread pool.
+    fn start_team(&mut self) -> Option<&Team> {
         let size = rayon::current_num_threads();
-        if !self.parallel || size < 2 {
+        if size < 2 {
             return None;
         }
         if self.team.as_ref().is_none_or(|t| t.size() != size) {
