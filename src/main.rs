@@ -454,7 +454,15 @@ fn main() -> ExitCode {
         Command::Validate { quick, cases, out } => validate(quick, cases, out),
         // The time loop runs on a worker of the thread pool, whose size (RAYON_NUM_THREADS, else
         // the cores) sets the members of the engine's team of threads.
-        Command::Run { deck, var, log, no_progress, mc_geometry_tolerance, mc_update_every, threads_mode } => {
+        Command::Run {
+            deck,
+            var,
+            log,
+            no_progress,
+            mc_geometry_tolerance,
+            mc_update_every,
+            threads_mode,
+        } => {
             let opts = RunFlags { no_progress, mc_geometry_tolerance, mc_update_every, threads_mode };
             rayon::scope(|_| run(deck, var, log, opts))
         }

@@ -243,7 +243,8 @@ fn threads_mode_is_checked_and_changes_no_result() {
     assert!(!ok && out.contains("invalid value 'sometimes' for '--threads-mode"), "{out}");
     let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--threads-mode", "parallel"]);
     assert!(ok, "{out}");
-    let data = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact/data/input.data";
+    let data =
+        "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact/data/input.data";
     if !std::path::Path::new(data).exists() {
         eprintln!("skipped the hydrogel part: needs the liggghts-doc example data");
         return;
@@ -254,7 +255,14 @@ fn threads_mode_is_checked_and_changes_no_result() {
         let out = dir.path().join(format!("piston_{mode}.txt"));
         let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
             .env("RAYON_NUM_THREADS", "2")
-            .args(["run", decks.join("hydrogel.in").to_str().unwrap(), "--threads-mode", mode, "-log", "none"])
+            .args([
+                "run",
+                decks.join("hydrogel.in").to_str().unwrap(),
+                "--threads-mode",
+                mode,
+                "-log",
+                "none",
+            ])
             .args(["-var", "stroke", "600", "-var", "strokes", "2", "-var", "every", "10"])
             .args(["-var", "dir", decks.to_str().unwrap(), "-var", "out", out.to_str().unwrap()])
             .output()

@@ -54,7 +54,10 @@ fn two_threads_give_the_serial_result_bit_for_bit() {
         assert!(serial.len() > 1000, "law {law}: piston output too short");
         for pool in [2, 3] {
             let parallel = piston_force(tmp.path(), law, geomtol, PairThreads::Parallel, pool);
-            assert!(serial == parallel, "law {law}, geomtol {geomtol}: {pool} threads changed the piston force");
+            assert!(
+                serial == parallel,
+                "law {law}, geomtol {geomtol}: {pool} threads changed the piston force"
+            );
         }
     }
 }

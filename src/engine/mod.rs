@@ -26,9 +26,9 @@ use crate::physics::pair::{
 };
 use crate::physics::{Material, PairCoeffs, Vec3};
 
+use crate::team::{share, SplitMut, Team};
 pub use mesh::Mesh;
 use neighbor::CellList;
-use crate::team::{share, SplitMut, Team};
 
 /// Moment of inertia prefactor of a solid sphere, I = 0.4 m r² (as LIGGGHTS `nve/sphere`).
 const INERTIA: f64 = 0.4;
@@ -683,12 +683,14 @@ impl World {
         };
         match self.team.as_ref().filter(|_| self.parallel) {
             Some(team) => {
-                let (xs, vs, os) = (SplitMut::new(&mut p.x), SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
+                let (xs, vs, os) =
+                    (SplitMut::new(&mut p.x), SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
                 let size = team.size();
                 team.run(|k| {
                     let r = share(n, size, k);
                     // SAFETY: `share` gives each member its own range of particles.
-                    let (x, v, o) = unsafe { (xs.range(r.clone()), vs.range(r.clone()), os.range(r.clone())) };
+                    let (x, v, o) =
+                        unsafe { (xs.range(r.clone()), vs.range(r.clone()), os.range(r.clone())) };
                     kick(r, x, v, o);
                     Ok::<(), ()>(())
                 })
@@ -713,7 +715,11 @@ impl World {
                 let dtirot = dtfrot / (radius[i] * radius[i] * mass[i]);
                 *omega += dtirot * torque[i];
                 if !(x[i].iter().all(|c| c.is_finite()) && v.iter().all(|c| c.is_finite())) {
-                    return Err(StepError { step, particle: id[i], cause: "position or velocity is not finite".into() });
+                    return Err(StepError {
+                        step,
+                        particle: id[i],
+                        cause: "position or velocity is not finite".into(),
+                    });
                 }
             }
             Ok(())
@@ -1724,7 +1730,6 @@ const TUNE_SETTLE: u64 = 2;
 /// Steps after which the first serial-vs-threads probe has decided (benchmarks warm up this long).
 pub const THREAD_PROBE_STEPS: u64 = 2 * TUNE_WINDOW;
 
-
 /// Fewest pairs in a block of the threaded pair pass, and most blocks (block indices are kept
 /// in a `u16` per particle).
 const MIN_BLOCK_PAIRS: usize = 512;
@@ -1735,8 +1740,6 @@ const BALANCE_PASSES: u32 = 200;
 
 /// Fewest wall contacts worth a threaded wall pass.
 const MIN_THREADED_WALL_CONTACTS: usize = 64;
-
-
 
 /// Read-only view of the state that one pair evaluation needs (shared between threads).
 struct PairCtx<'a> {

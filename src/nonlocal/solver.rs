@@ -1186,7 +1186,8 @@ impl Nonlocal {
                 let ps = share(n, size, m);
                 // SAFETY: `share` gives each member its own particles, hence its own row entries,
                 // and its own value buffer.
-                let (out, vals) = unsafe { (app.range(start[ps.start]..start[ps.end]), &mut vals.range(m..m + 1)[0]) };
+                let (out, vals) =
+                    unsafe { (app.range(start[ps.start]..start[ps.end]), &mut vals.range(m..m + 1)[0]) };
                 let mut at = 0;
                 for p in ps {
                     let row = list(p);
