@@ -245,6 +245,12 @@ pub fn closest_point(t: &Triangle, p: &Vec3) -> Option<Vec3> {
     active.then_some(q)
 }
 
+/// Squared distance from `p` to triangle `t`, active edges or not.
+#[inline]
+pub fn distance_squared(t: &Triangle, p: &Vec3) -> f64 {
+    (closest_on_triangle(&t.v[0], &t.v[1], &t.v[2], p).0 - p).norm_squared()
+}
+
 /// Closest point on triangle abc to p with the Voronoi region it lies in (Ericson, Real-Time
 /// Collision Detection, 5.1.5). Edges are numbered ab = 0, bc = 1, ca = 2.
 fn closest_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Vec3, Region) {
