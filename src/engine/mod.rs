@@ -2524,8 +2524,8 @@ mod tests {
         w.closure = Some(Closure::Hertz);
         w.skin = 1e-4;
         w.dt = 1e-5;
-        let mut id = 1;
-        for (i, j, k) in (0..4).flat_map(|i| (0..4).flat_map(move |j| (0..2).map(move |k| (i, j, k)))) {
+        let lattice = (0..4).flat_map(|i| (0..4).flat_map(move |j| (0..2).map(move |k| (i, j, k))));
+        for (id, (i, j, k)) in (1..).zip(lattice) {
             // Heights staggered by up to 0.9 r, so contacts start at many different steps.
             let dz = 1e-4 * ((7 * i + 3 * j + 5 * k) % 10) as f64;
             let x = Vec3::new(
@@ -2534,7 +2534,6 @@ mod tests {
                 1.5e-3 + 2.5e-3 * k as f64 + dz,
             );
             w.p.push(id, 0, x, 2.0 * r, 1000.0);
-            id += 1;
         }
         for (axis, pos) in [(0, 0.0), (0, l), (1, 0.0), (1, l), (2, 0.0)] {
             let geom = WallGeom::Plane(PlaneWall { axis, pos, wall_type: 0 });
