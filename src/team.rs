@@ -147,6 +147,32 @@ impl Team {
     }
 }
 
+impl Team {
+    /// [`Team::run`] with every member's equal share of `0..len` ([`share`]) handed to it: the
+    /// shape of most passes (particles, pairs, candidates), which split a list into consecutive
+    /// ranges. The ranges are disjoint, which is what taking them from a [`SplitMut`] requires.
+    pub fn run_shares<E: Send>(
+        &self,
+        len: usize,
+        f: impl Fn(usize, Range<usize>) -> Result<(), E> + Sync,
+    ) -> Result<(), E> {
+        let size = self.size();
+        self.run(|k| f(k, share(len, size, k)))
+    }
+
+    /// [`Team::run_shares`] for a pass that cannot fail.
+    pub fn for_shares(&self, len: usize, f: impl Fn(usize, Range<usize>) + Sync) {
+        let done = self.run_shares(len, |k, r| {
+            f(k, r);
+            Ok::<(), std::convert::Infallible>(())
+        });
+        match done {
+            Ok(()) => {}
+            Err(never) => match never {},
+        }
+    }
+}
+
 impl Drop for Team {
     fn drop(&mut self) {
         let s = &*self.shared;
@@ -272,6 +298,27 @@ mod tests {
                 .unwrap();
             }
             assert!(data.iter().all(|&v| v == 200 * 201 / 2), "size {size}");
+        }
+    }
+
+    /// `for_shares` and `run_shares` hand member k exactly `share(len, size, k)`: together the
+    /// ranges cover 0..len once, also when len is not a multiple of the size (or is smaller).
+    #[test]
+    fn shares_cover_the_list_once() {
+        for size in [1, 2, 3] {
+            let team = Team::new(size);
+            for len in [0, 1, 2, 7, 1000] {
+                let mut hits = vec![0u32; len];
+                let view = SplitMut::new(&mut hits);
+                team.for_shares(len, |k, r| {
+                    assert_eq!(r, share(len, size, k));
+                    // SAFETY: the shares are disjoint.
+                    unsafe { view.range(r) }.iter_mut().for_each(|h| *h += 1);
+                });
+                assert!(hits.iter().all(|&h| h == 1), "size {size}, len {len}");
+                let r = team.run_shares(len, |k, r| if r.is_empty() { Ok(()) } else { Err(k) });
+                assert_eq!(r, if len == 0 { Ok(()) } else { Err(0) });
+            }
         }
     }
 

@@ -705,16 +705,12 @@ impl World {
             Some(team) => {
                 let (xs, vs, os) =
                     (SplitMut::new(&mut p.x), SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
-                let size = team.size();
-                team.run(|k| {
-                    let r = share(n, size, k);
-                    // SAFETY: `share` gives each member its own range of particles.
+                team.for_shares(n, |_, r| {
+                    // SAFETY: the members' shares are disjoint ranges of particles.
                     let (x, v, o) =
                         unsafe { (xs.range(r.clone()), vs.range(r.clone()), os.range(r.clone())) };
                     kick(r, x, v, o);
-                    Ok::<(), ()>(())
-                })
-                .expect("the half-kick cannot fail");
+                });
             }
             None => kick(0..n, &mut p.x, &mut p.v, &mut p.omega),
         }
@@ -747,10 +743,8 @@ impl World {
         match self.team.as_ref().filter(|_| self.parallel) {
             Some(team) => {
                 let (vs, os) = (SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
-                let size = team.size();
-                team.run(|k| {
-                    let r = share(n, size, k);
-                    // SAFETY: `share` gives each member its own range of particles.
+                team.run_shares(n, |_, r| {
+                    // SAFETY: the members' shares are disjoint ranges of particles.
                     let (v, o) = unsafe { (vs.range(r.clone()), os.range(r.clone())) };
                     kick(r, v, o)
                 })
@@ -920,9 +914,11 @@ impl World {
         if !(total.is_finite() && total > 0.0) {
             return;
         }
-        // Half-way to the balanced boundaries each time: the times are noisy. (A short list,
-        // every BALANCE_PASSES passes.)
-        let mut cuts = self.pair_cuts.clone();
+        // Half-way to the balanced boundaries each time: the times are noisy. On the stack: at
+        // most MAX_PAIR_BLOCKS + 1 boundaries.
+        let mut buf = [0usize; MAX_PAIR_BLOCKS + 1];
+        let cuts = &mut buf[..=blocks];
+        cuts.copy_from_slice(&self.pair_cuts);
         let mut acc = 0.0;
         for b in 1..blocks {
             acc += rate(b - 1) / total;
@@ -932,7 +928,7 @@ impl World {
         self.block_ns.iter_mut().for_each(|t| *t = 0);
         self.block_passes = 0;
         if cuts.iter().zip(&self.pair_cuts).any(|(a, b)| a.abs_diff(*b) * 100 > np) {
-            self.pair_cuts = cuts;
+            self.pair_cuts.copy_from_slice(cuts);
             self.own_blocks();
         }
     }
@@ -1391,14 +1387,11 @@ impl World {
             {
                 // Cleared by the members, each its own particles: the lines then sit in the
                 // cache of the core that adds into most of them next.
-                let (fs, ts, size) = (SplitMut::new(f), SplitMut::new(torque), team.size());
-                team.run(|k| {
-                    let r = share(n, size, k);
-                    // SAFETY: `share` gives each member its own range of particles.
+                let (fs, ts) = (SplitMut::new(f), SplitMut::new(torque));
+                team.for_shares(n, |_, r| {
+                    // SAFETY: the members' shares are disjoint ranges of particles.
                     unsafe { (fs.range(r.clone()).fill(Vec3::zeros()), ts.range(r).fill(Vec3::zeros())) };
-                    Ok::<(), ()>(())
-                })
-                .expect("clearing cannot fail");
+                });
             }
             let sums = SharedSums { f: f.as_mut_ptr(), torque: torque.as_mut_ptr(), n };
             // Every list emptied first: a block without pairs (fewer runs than blocks) adds none.
@@ -1457,14 +1450,12 @@ impl World {
                 self.pair_out.resize(np, PairOut::default());
             }
             let team = self.team.as_ref().expect("threads() started the team");
-            let size = team.size();
             {
                 let (pairs, outs) = (SplitMut::new(&mut self.pairs), SplitMut::new(&mut self.pair_out));
                 let forces = SplitMut::new(&mut self.pair_force);
                 let drs = &self.pair_dr;
-                team.run(|k| {
-                    let r = share(np, size, k);
-                    // SAFETY: `share` gives each member its own range of pairs.
+                team.run_shares(np, |_, r| {
+                    // SAFETY: the members' shares are disjoint ranges of pairs.
                     let (prs, outs, force) =
                         unsafe { (pairs.range(r.clone()), outs.range(r.clone()), forces.range(r.clone())) };
                     let drs = &drs[r];
@@ -1485,9 +1476,8 @@ impl World {
             // them (from zero: the sums were cleared above): no write is shared between threads.
             let (start, inc, outs) = (&self.inc_start, &self.inc, &self.pair_out);
             let (fs, ts) = (SplitMut::new(&mut self.p.f), SplitMut::new(&mut self.p.torque));
-            team.run(|k| {
-                let r = share(n, size, k);
-                // SAFETY: `share` gives each member its own range of particles.
+            team.for_shares(n, |_, r| {
+                // SAFETY: the members' shares are disjoint ranges of particles.
                 let (fs, ts) = unsafe { (fs.range(r.clone()), ts.range(r.clone())) };
                 for (i, (f, t)) in r.zip(fs.iter_mut().zip(ts.iter_mut())) {
                     let (mut fa, mut ta) = (Vec3::zeros(), Vec3::zeros());
@@ -1505,9 +1495,7 @@ impl World {
                     }
                     (*f, *t) = (fa, ta);
                 }
-                Ok::<(), ()>(())
-            })
-            .expect("the per-particle sums cannot fail");
+            });
         } else {
             // The threaded passes add in this order too: identical sums.
             let (f, torque) = (&mut self.f_buf, &mut self.t_buf);

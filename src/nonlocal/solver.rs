@@ -38,7 +38,7 @@ use faer::Mat;
 use super::kernel::{BoundKernel, Kernel};
 use crate::physics::material::{Material, PairCoeffs};
 use crate::physics::Vec3;
-use crate::team::{share, SplitMut, Team};
+use crate::team::{SplitMut, Team};
 
 /// Smallest reference force for the relative force-balance residual, in units of E_ref·L².
 /// 1e-9 E_ref·L² is the Hertz force of an overlap of about 1e-6 radii: below it a packing is
@@ -1114,18 +1114,15 @@ impl Nonlocal {
         s.geo.resize(total, None);
         {
             let geo = SplitMut::new(&mut s.geo);
-            team.run(|m| {
-                let r = share(total, size, m);
-                // SAFETY: `share` gives each member its own range of candidates.
+            team.for_shares(total, |_, r| {
+                // SAFETY: the members' shares are disjoint ranges of candidates.
                 let out = unsafe { geo.range(r.clone()) };
                 for (k, g) in r.zip(out) {
                     let (i, o) = other_of(k);
                     let v = self.geometry(x, i, o);
                     *g = (v.gamma > -margin).then_some(v);
                 }
-                Ok::<(), ()>(())
-            })
-            .expect("the geometry cannot fail");
+            });
         }
         let geo = &s.geo;
         // Per particle, in compressed rows: the loaded contacts of the previous step (index,
@@ -1182,10 +1179,9 @@ impl Nonlocal {
             s.app.resize(adj.len(), 0.0);
             // Each member the rows of its own range of particles, i.e. its own entries.
             let (app, vals) = (SplitMut::new(&mut s.app), SplitMut::new(&mut s.vals));
-            team.run(|m| {
-                let ps = share(n, size, m);
-                // SAFETY: `share` gives each member its own particles, hence its own row entries,
-                // and its own value buffer.
+            team.for_shares(n, |m, ps| {
+                // SAFETY: the members' shares are disjoint ranges of particles, hence of row
+                // entries, and each member m takes its own value buffer.
                 let (out, vals) =
                     unsafe { (app.range(start[ps.start]..start[ps.end]), &mut vals.range(m..m + 1)[0]) };
                 let mut at = 0;
@@ -1207,9 +1203,7 @@ impl Nonlocal {
                     }
                     at += z;
                 }
-                Ok::<(), ()>(())
-            })
-            .expect("the kernel sums cannot fail");
+            });
             s.app_i.resize(total, 0.0);
             s.app_j.resize(total, 0.0);
             for p in 0..n {
@@ -1233,9 +1227,8 @@ impl Nonlocal {
         // Each contact's overlap and force (d_out, p_out), then the sums in contact order.
         let (app_i, app_j, floor) = (&s.app_i, &s.app_j, &s.floor);
         let (ds, ps) = (SplitMut::new(&mut d_out[..total]), SplitMut::new(&mut p_out[..total]));
-        team.run(|m| {
-            let r = share(total, size, m);
-            // SAFETY: `share` gives each member its own range of contacts.
+        team.for_shares(total, |_, r| {
+            // SAFETY: the members' shares are disjoint ranges of contacts.
             let (ds, ps) = unsafe { (ds.range(r.clone()), ps.range(r.clone())) };
             for (k, (d_out, p_out)) in r.zip(ds.iter_mut().zip(ps.iter_mut())) {
                 *p_out = 0.0;
@@ -1269,9 +1262,7 @@ impl Nonlocal {
                     *p_out = Self::force_of(&c, delta).0;
                 }
             }
-            Ok::<(), ()>(())
-        })
-        .expect("the contact forces cannot fail");
+        });
         s.f.clear();
         s.f.extend(self.body.iter().map(|b| b * self.body_factor));
         let (mut sum, mut cnt) = (0.0, 0usize);
