@@ -145,9 +145,7 @@ impl Team {
             None => Ok(()),
         }
     }
-}
 
-impl Team {
     /// [`Team::run`] with every member's equal share of `0..len` ([`share`]) handed to it: the
     /// shape of most passes (particles, pairs, candidates), which split a list into consecutive
     /// ranges. The ranges are disjoint, which is what taking them from a [`SplitMut`] requires.
@@ -162,14 +160,10 @@ impl Team {
 
     /// [`Team::run_shares`] for a pass that cannot fail.
     pub fn for_shares(&self, len: usize, f: impl Fn(usize, Range<usize>) + Sync) {
-        let done = self.run_shares(len, |k, r| {
+        let Ok(()) = self.run_shares(len, |k, r| {
             f(k, r);
             Ok::<(), std::convert::Infallible>(())
         });
-        match done {
-            Ok(()) => {}
-            Err(never) => match never {},
-        }
     }
 }
 
