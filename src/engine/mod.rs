@@ -212,17 +212,23 @@ pub struct WallFix {
     pub geom: WallGeom,
 }
 
-/// Candidate pair with its contact history (tangential ξ) and what the next multi-contact pass
-/// reads: exactly what every step reads and writes per pair, in one cache line. Per-step
-/// transients (this step's radius changes, the recorded force) live in their own arrays: at
-/// large N the pairs no longer fit in cache, and the passes that only need these fields (the
-/// multi-contact gather, the slot lists) then stream half the bytes.
+/// Candidate pair with its tangential history ξ: what every step reads and writes per pair, 32
+/// bytes, two to a cache line. What only the multi-contact closure needs lives beside it in
+/// [`PairHist`], and per-step transients (this step's radius changes, the recorded force) in their
+/// own arrays: at large N the pairs no longer fit in cache and stream from memory every step, so a
+/// Hertz pass moves half the bytes it would if the closure's state rode along.
 #[derive(Debug, Clone, Copy)]
-#[repr(align(64))]
+#[repr(align(32))]
 struct Pair {
     i: u32,
     j: u32,
     shear: Vec3,
+}
+
+/// What the multi-contact pass reads of a pair, written by the pair pass before it (kept, one per
+/// pair, only under the closure).
+#[derive(Debug, Clone, Copy)]
+struct PairHist {
     /// |F·n| of the previous step (Eq. 2 is lagged one step).
     fn_prev: f64,
     /// Modified radii r + Δ used at the previous step (contact point of the next step, as LIGGGHTS).
@@ -231,6 +237,13 @@ struct Pair {
     /// Centres closer than (1 + RECEIVER_GAP)(r_i + r_j) at the last evaluation: the pair may
     /// receive multi-contact terms (growth could make it touch). True for a new pair.
     near: bool,
+}
+
+impl PairHist {
+    /// A pair just found by the neighbour search. LIGGGHTS starts a pair's history at zero radii:
+    /// the contact point sits at the centre and receives no multi-contact term until the pair is
+    /// evaluated.
+    const NEW: PairHist = PairHist { fn_prev: 0.0, ri_prev: 0.0, rj_prev: 0.0, near: true };
 }
 
 /// This step's multi-contact radius changes of a pair: [Δ of i at this contact, Δ of j].
@@ -416,6 +429,9 @@ pub struct World {
     cand: Vec<(u32, u32)>,
     pairs: Vec<Pair>,
     pairs_old: Vec<Pair>,
+    /// Per pair, under the multi-contact closure: what its next pass reads (empty under Hertz).
+    pair_hist: Vec<PairHist>,
+    pair_hist_old: Vec<PairHist>,
     wc: Vec<WallContact>,
     wc_old: Vec<WallContact>,
     /// Wall elements that may touch a particle before the next candidate build, in the wall scan's
@@ -470,10 +486,8 @@ pub struct World {
     /// Geometry tolerance: the kept influence matrices, one per particle.
     mc_cache: Option<InfluenceCache>,
     pair_out: Vec<PairOut>,
-    /// Per pair: this step's multi-contact radius changes (zero without the closure).
+    /// Per pair, under the multi-contact closure: this step's radius changes (a Hertz pass reads none).
     pair_dr: Vec<PairDr>,
-    /// `pair_dr` holds radius changes that a Hertz pass must not see.
-    pair_dr_dirty: bool,
     /// Per pair: the total contact force on i from j at the last force pass (zero when apart),
     /// for the stress and coordination outputs.
     pair_force: Vec<Vec3>,
@@ -843,29 +857,25 @@ impl World {
             self.next_sort = self.step + self.sort_every;
         }
         self.cells.build(&domain, &self.p.x, &self.p.radius, self.skin, self.pair_reach(), &mut self.cand);
-        // Carry the history over: both lists are sorted by (i, j).
+        // Carry the history over: both lists are sorted by (i, j). The closure's state rides
+        // along when it is kept (a closure that starts later finds every pair new).
         std::mem::swap(&mut self.pairs, &mut self.pairs_old);
+        std::mem::swap(&mut self.pair_hist, &mut self.pair_hist_old);
         self.pairs.clear();
+        self.pair_hist.clear();
+        let keep_hist = self.closure == Some(Closure::MultiContact);
+        let old_hist = self.pair_hist_old.len() == self.pairs_old.len();
         let mut k = 0;
         for &(i, j) in &self.cand {
             while k < self.pairs_old.len() && (self.pairs_old[k].i, self.pairs_old[k].j) < (i, j) {
                 k += 1;
             }
             let old = self.pairs_old.get(k).filter(|o| o.i == i && o.j == j);
-            self.pairs.push(match old {
-                Some(o) => *o,
-                None => Pair {
-                    i,
-                    j,
-                    shear: Vec3::zeros(),
-                    fn_prev: 0.0,
-                    // LIGGGHTS starts a pair's history at zero radii: the contact point sits at
-                    // the centre and receives no multi-contact term until the pair is evaluated.
-                    ri_prev: 0.0,
-                    rj_prev: 0.0,
-                    near: true,
-                },
-            });
+            self.pairs.push(old.copied().unwrap_or(Pair { i, j, shear: Vec3::zeros() }));
+            if keep_hist {
+                let h = old.filter(|_| old_hist).map(|_| self.pair_hist_old[k]);
+                self.pair_hist.push(h.unwrap_or(PairHist::NEW));
+            }
         }
         self.slots_stale = true;
         self.owner_key = None;
@@ -1041,7 +1051,7 @@ impl World {
             new_of_old[o as usize] = k as u32;
         }
         self.p.permute(&old_of_new);
-        for pr in &mut self.pairs {
+        for (k, pr) in self.pairs.iter_mut().enumerate() {
             let (a, b) = (new_of_old[pr.i as usize], new_of_old[pr.j as usize]);
             if a < b {
                 (pr.i, pr.j) = (a, b);
@@ -1050,10 +1060,21 @@ impl World {
                 // displacement relative to j, so it changes sign; the radii trade places.
                 (pr.i, pr.j) = (b, a);
                 pr.shear = -pr.shear;
-                std::mem::swap(&mut pr.ri_prev, &mut pr.rj_prev);
+                if let Some(h) = self.pair_hist.get_mut(k) {
+                    std::mem::swap(&mut h.ri_prev, &mut h.rj_prev);
+                }
             }
         }
-        self.pairs.sort_unstable_by_key(|pr| (pr.i, pr.j));
+        if self.pair_hist.len() == self.pairs.len() {
+            // One permutation for both lists.
+            let mut order: Vec<u32> = (0..self.pairs.len() as u32).collect();
+            order.sort_unstable_by_key(|&k| (self.pairs[k as usize].i, self.pairs[k as usize].j));
+            self.pairs = order.iter().map(|&k| self.pairs[k as usize]).collect();
+            self.pair_hist = order.iter().map(|&k| self.pair_hist[k as usize]).collect();
+        } else {
+            self.pair_hist.clear();
+            self.pairs.sort_unstable_by_key(|pr| (pr.i, pr.j));
+        }
         for c in &mut self.wc {
             c.p = new_of_old[c.p as usize];
         }
@@ -1232,11 +1253,15 @@ impl World {
             self.pair_mc.resize(self.pairs.len(), false);
             self.slots_stale = true;
         }
+        if self.pair_hist.len() != self.pairs.len() {
+            // The closure started since the last neighbour build: every pair is new to it.
+            self.pair_hist.clear();
+            self.pair_hist.resize(self.pairs.len(), PairHist::NEW);
+        }
         self.pair_loads.resize(self.pairs.len(), PairLoad::default());
         // Pairs outside the multi-contact set get no slot, hence no change.
         self.pair_dr.clear();
         self.pair_dr.resize(self.pairs.len(), [0.0; 2]);
-        self.pair_dr_dirty = true;
         let (p, types) = (&self.p, &self.mc_types);
         // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
         let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
@@ -1250,9 +1275,9 @@ impl World {
         // spheres' surfaces along the centre line when loaded, else each particle's own surface
         // point.
         let mut stale = false;
-        for ((pr, m), load) in self.pairs.iter().zip(self.pair_mc.iter_mut()).zip(self.pair_loads.iter_mut())
-        {
-            let now = pr.fn_prev > 0.0 || pr.near;
+        let taking_part = self.pair_mc.iter_mut().zip(self.pair_loads.iter_mut());
+        for ((pr, h), (m, load)) in self.pairs.iter().zip(&self.pair_hist).zip(taking_part) {
+            let now = h.fn_prev > 0.0 || h.near;
             if *m != now {
                 *m = now;
                 stale = true;
@@ -1264,13 +1289,13 @@ impl World {
             let mut xab = p.x[b] - p.x[a];
             domain.minimum_image(&mut xab);
             let len = xab.norm().max(1e-300);
-            load.points = if pr.fn_prev > eps(a) {
-                let tmp = xab * ((pr.ri_prev - pr.rj_prev) * 0.5 / len);
+            load.points = if h.fn_prev > eps(a) {
+                let tmp = xab * ((h.ri_prev - h.rj_prev) * 0.5 / len);
                 [tmp + 0.5 * xab, tmp - 0.5 * xab]
             } else {
-                [xab * (pr.ri_prev / len), -xab * (pr.rj_prev / len)]
+                [xab * (h.ri_prev / len), -xab * (h.rj_prev / len)]
             };
-            load.force = pr.fn_prev;
+            load.force = h.fn_prev;
         }
         if stale || self.slots_stale {
             self.build_slots();
@@ -1369,10 +1394,9 @@ impl World {
             && self.coeffs.iter().all(|c| c.tangential == Tangential::History)
             && PairLanes::vectorised();
         let np = self.pairs.len();
-        if !mc && (self.pair_dr_dirty || self.pair_dr.len() != np) {
-            self.pair_dr.clear();
-            self.pair_dr.resize(np, [0.0; 2]);
-            self.pair_dr_dirty = false;
+        if !mc {
+            // Hertz keeps no closure state: a closure that starts later finds every pair new.
+            self.pair_hist.clear();
         }
         // Every entry is overwritten below: only the length has to match (no per-step fill).
         if self.pair_force.len() != np {
@@ -1402,7 +1426,7 @@ impl World {
             let (pairs, forces) = (SplitMut::new(&mut self.pairs), SplitMut::new(&mut self.pair_force));
             let deferred = SplitMut::new(&mut self.deferred[..blocks]);
             let block_ns = SplitMut::new(&mut self.block_ns[..blocks]);
-            let drs = &self.pair_dr;
+            let (drs, hists) = (&self.pair_dr, SplitMut::new(&mut self.pair_hist));
             team.run(|b| {
                 if b >= blocks {
                     return Ok(());
@@ -1415,18 +1439,10 @@ impl World {
                     let d = &mut deferred.range(b..b + 1)[0];
                     (pairs.range(r.clone()), forces.range(r.clone()), d, &mut block_ns.range(b..b + 1)[0])
                 };
-                let drs = &drs[r];
+                // SAFETY: as the pairs.
+                let closure = mc.then(|| (&drs[r.clone()], unsafe { hists.range(r) }));
                 let mut sink = OwnedSums { sums, owner, block: b as u16, deferred, force };
-                let res = if batched {
-                    ctx.eval_batched(prs, drs, &mut sink)
-                } else {
-                    let mut o = PairOut::default();
-                    prs.iter_mut().zip(drs).enumerate().try_for_each(|(k, (pr, dr))| {
-                        ctx.eval(pr, *dr, &mut o)?;
-                        sink.put(k, pr.i as usize, pr.j as usize, &o);
-                        Ok(())
-                    })
-                };
+                let res = ctx.pass(prs, closure, batched, &mut sink);
                 *ns += t0.elapsed().as_nanos() as u64;
                 res
             })
@@ -1453,22 +1469,14 @@ impl World {
             {
                 let (pairs, outs) = (SplitMut::new(&mut self.pairs), SplitMut::new(&mut self.pair_out));
                 let forces = SplitMut::new(&mut self.pair_force);
-                let drs = &self.pair_dr;
+                let (drs, hists) = (&self.pair_dr, SplitMut::new(&mut self.pair_hist));
                 team.run_shares(np, |_, r| {
                     // SAFETY: the members' shares are disjoint ranges of pairs.
-                    let (prs, outs, force) =
-                        unsafe { (pairs.range(r.clone()), outs.range(r.clone()), forces.range(r.clone())) };
-                    let drs = &drs[r];
-                    let mut keep = Keep { outs, force };
-                    if batched {
-                        return ctx.eval_batched(prs, drs, &mut keep);
-                    }
-                    for (k, (pr, dr)) in prs.iter_mut().zip(drs).enumerate() {
-                        let mut o = PairOut::default();
-                        ctx.eval(pr, *dr, &mut o)?;
-                        keep.put(k, pr.i as usize, pr.j as usize, &o);
-                    }
-                    Ok(())
+                    let (prs, outs, force, closure) = unsafe {
+                        let closure = mc.then(|| (&drs[r.clone()], hists.range(r.clone())));
+                        (pairs.range(r.clone()), outs.range(r.clone()), forces.range(r), closure)
+                    };
+                    ctx.pass(prs, closure, batched, &mut Keep { outs, force })
                 })
                 .map_err(|e| *e)?;
             }
@@ -1504,15 +1512,8 @@ impl World {
             torque.clear();
             torque.resize(n, Vec3::zeros());
             let mut sums = SumInto { f, torque, force: &mut self.pair_force };
-            if batched {
-                ctx.eval_batched(&mut self.pairs, &self.pair_dr, &mut sums).map_err(|e| *e)?;
-            } else {
-                let mut o = PairOut::default();
-                for (k, (pr, dr)) in self.pairs.iter_mut().zip(&self.pair_dr).enumerate() {
-                    ctx.eval(pr, *dr, &mut o).map_err(|e| *e)?;
-                    sums.put(k, pr.i as usize, pr.j as usize, &o);
-                }
-            }
+            let closure = mc.then_some((&self.pair_dr[..], &mut self.pair_hist[..]));
+            ctx.pass(&mut self.pairs, closure, batched, &mut sums).map_err(|e| *e)?;
             std::mem::swap(&mut self.p.f, &mut self.f_buf);
             std::mem::swap(&mut self.p.torque, &mut self.t_buf);
         }
@@ -1692,8 +1693,14 @@ impl World {
         };
         let mut out = Vec::new();
         let mut o = PairOut::default();
-        for (pr, dr) in self.pairs.iter_mut().zip(&self.pair_dr) {
-            ctx.eval(pr, *dr, &mut o).map_err(|e| *e)?;
+        let np = self.pairs.len();
+        let mc = self.closure == Some(Closure::MultiContact)
+            && self.pair_hist.len() == np
+            && self.pair_dr.len() == np;
+        let mut state = ClosureState { dr: &self.pair_dr, hist: &mut self.pair_hist };
+        for (k, pr) in self.pairs.iter_mut().enumerate() {
+            if mc { ctx.eval(pr, k, &mut state, &mut o) } else { ctx.eval(pr, k, &mut NoClosure, &mut o) }
+                .map_err(|e| *e)?;
             if o.force == Vec3::zeros() {
                 continue;
             }
@@ -1718,8 +1725,14 @@ impl World {
         self.pair_force.iter().filter(|f| **f != Vec3::zeros()).count()
     }
 
+    /// Contacts carrying a normal force at the last force pass: (particle pairs, particle–wall).
+    /// Under Hertz, which keeps no normal force per pair, the pairs carrying a force.
     pub fn contact_counts(&self) -> (usize, usize) {
-        let pp = self.pairs.iter().filter(|p| p.fn_prev > 0.0).count();
+        let pp = if self.pair_hist.len() == self.pairs.len() && !self.pairs.is_empty() {
+            self.pair_hist.iter().filter(|h| h.fn_prev > 0.0).count()
+        } else {
+            self.pair_contacts()
+        };
         let pw = self.wc.iter().filter(|c| c.fn_prev > 0.0).count();
         (pp, pw)
     }
@@ -1812,8 +1825,15 @@ impl PairCtx<'_> {
     /// Force on i and torques on i and j of one pair into `out` (`touching` false when apart);
     /// updates the pair's history when `update`.
     #[inline]
-    fn eval(&self, pr: &mut Pair, dr: PairDr, out: &mut PairOut) -> Result<(), Box<StepError>> {
-        let Some((d, kimg)) = self.approach(pr, dr) else {
+    fn eval(
+        &self,
+        pr: &mut Pair,
+        k: usize,
+        state: &mut impl PairState,
+        out: &mut PairOut,
+    ) -> Result<(), Box<StepError>> {
+        let dr = state.dr(k);
+        let Some((d, kimg)) = self.approach(pr, k, dr, state) else {
             *out = PairOut::default();
             return Ok(());
         };
@@ -1859,9 +1879,7 @@ impl PairCtx<'_> {
         };
         if self.update {
             pr.shear = shear;
-            pr.fn_prev = fnorm;
-            pr.ri_prev = ri_stored;
-            pr.rj_prev = rj;
+            state.keep(k, fnorm, ri_stored, rj);
         }
         Ok(())
     }
@@ -1870,7 +1888,13 @@ impl PairCtx<'_> {
     /// the image count across a sheared boundary, and the `near` flag. A pair whose modified
     /// spheres are apart gets its history reset, and `None`.
     #[inline(always)]
-    fn approach(&self, pr: &mut Pair, dr: PairDr) -> Option<(Vec3, f64)> {
+    fn approach(
+        &self,
+        pr: &mut Pair,
+        k: usize,
+        dr: PairDr,
+        state: &mut impl PairState,
+    ) -> Option<(Vec3, f64)> {
         let p = self.p;
         let (i, j) = (pr.i as usize, pr.j as usize);
         let mut d = p.x[i] - p.x[j];
@@ -1879,13 +1903,11 @@ impl PairCtx<'_> {
         let radsum = ri + rj;
         let d2 = d.norm_squared();
         let reach = (1.0 + RECEIVER_GAP) * (p.radius[i] + p.radius[j]);
-        pr.near = d2 < reach * reach;
+        state.near(k, d2 < reach * reach);
         if d2 >= radsum * radsum {
             if self.update {
                 pr.shear = Vec3::zeros();
-                pr.fn_prev = 0.0;
-                pr.ri_prev = ri;
-                pr.rj_prev = rj;
+                state.keep(k, 0.0, ri, rj);
             }
             return None;
         }
@@ -2001,18 +2023,17 @@ impl PairCtx<'_> {
     fn eval_batched(
         &self,
         pairs: &mut [Pair],
-        drs: &[PairDr],
+        state: &mut impl PairState,
         sink: &mut impl PairSink,
     ) -> Result<(), Box<StepError>> {
         let p = self.p;
         let mut lanes = PairLanes::default();
         let mut slot = [0usize; LANES];
         let mut n = 0;
-        let drs = &drs[..pairs.len()];
         for k in 0..pairs.len() {
-            let (pr, dr) = (&mut pairs[k], drs[k]);
+            let (pr, dr) = (&mut pairs[k], state.dr(k));
             let (i, j) = (pr.i as usize, pr.j as usize);
-            let Some((d, kimg)) = self.approach(pr, dr) else {
+            let Some((d, kimg)) = self.approach(pr, k, dr, state) else {
                 sink.put(k, i, j, &PairOut::default());
                 continue;
             };
@@ -2038,13 +2059,13 @@ impl PairCtx<'_> {
             slot[n] = k;
             n += 1;
             if n == LANES {
-                self.flush(&mut lanes, &slot[..n], pairs, drs, sink)?;
+                self.flush(&mut lanes, &slot[..n], pairs, state, sink)?;
                 n = 0;
             }
         }
         if n > 0 {
             lanes.pad_from_first(n);
-            self.flush(&mut lanes, &slot[..n], pairs, drs, sink)?;
+            self.flush(&mut lanes, &slot[..n], pairs, state, sink)?;
         }
         Ok(())
     }
@@ -2055,7 +2076,7 @@ impl PairCtx<'_> {
         lanes: &mut PairLanes,
         slot: &[usize],
         pairs: &mut [Pair],
-        drs: &[PairDr],
+        state: &mut impl PairState,
         sink: &mut impl PairSink,
     ) -> Result<(), Box<StepError>> {
         lanes.evaluate(self.dt);
@@ -2064,7 +2085,7 @@ impl PairCtx<'_> {
             if !lanes.ok[l] {
                 // The pair-by-pair path names the cause (its history is still the step's input).
                 let mut o = PairOut::default();
-                self.eval(pr, drs[k], &mut o)?;
+                self.eval(pr, k, state, &mut o)?;
                 let (i, j) = (pr.i as usize, pr.j as usize);
                 return Err(Box::new(contact_error(
                     self.step,
@@ -2082,13 +2103,100 @@ impl PairCtx<'_> {
             };
             if self.update {
                 pr.shear = lane(&lanes.shear);
-                pr.fn_prev = lanes.fnorm[l];
-                pr.ri_prev = lanes.radius_i[l] + lanes.dri[l];
-                pr.rj_prev = lanes.radius_j[l] + lanes.drj[l];
+                let (ri, rj) = (lanes.radius_i[l] + lanes.dri[l], lanes.radius_j[l] + lanes.drj[l]);
+                state.keep(k, lanes.fnorm[l], ri, rj);
             }
             sink.put(k, pr.i as usize, pr.j as usize, &o);
         }
         Ok(())
+    }
+}
+
+impl PairCtx<'_> {
+    /// Evaluates `pairs` in order into `sink` (vectorised batches when `batched`), with their
+    /// radius changes and closure state when the multi-contact closure is on (`closure`, one
+    /// entry per pair each).
+    fn pass(
+        &self,
+        pairs: &mut [Pair],
+        closure: Option<(&[PairDr], &mut [PairHist])>,
+        batched: bool,
+        sink: &mut impl PairSink,
+    ) -> Result<(), Box<StepError>> {
+        match closure {
+            None => self.pass_with(pairs, &mut NoClosure, batched, sink),
+            Some((dr, hist)) => {
+                let n = pairs.len();
+                let mut state = ClosureState { dr: &dr[..n], hist: &mut hist[..n] };
+                self.pass_with(pairs, &mut state, batched, sink)
+            }
+        }
+    }
+
+    fn pass_with(
+        &self,
+        pairs: &mut [Pair],
+        state: &mut impl PairState,
+        batched: bool,
+        sink: &mut impl PairSink,
+    ) -> Result<(), Box<StepError>> {
+        if batched {
+            return self.eval_batched(pairs, state, sink);
+        }
+        let mut o = PairOut::default();
+        for (k, pr) in pairs.iter_mut().enumerate() {
+            self.eval(pr, k, state, &mut o)?;
+            sink.put(k, pr.i as usize, pr.j as usize, &o);
+        }
+        Ok(())
+    }
+}
+
+/// What a pair pass reads and keeps of the multi-contact closure, pair k of the pass: a trait so
+/// that each pass is compiled for one case, and a Hertz pass neither loads radius changes that
+/// are all zero nor stores a state nobody reads (at large N both would stream from memory).
+trait PairState {
+    /// This step's radius changes of pair k.
+    fn dr(&self, k: usize) -> PairDr;
+    /// Whether pair k is near enough to receive multi-contact terms.
+    fn near(&mut self, k: usize, near: bool);
+    /// What the next multi-contact pass reads of pair k: |F·n| and the modified radii.
+    fn keep(&mut self, k: usize, fnorm: f64, ri: f64, rj: f64);
+}
+
+/// Hertz: no radius changes, nothing kept.
+struct NoClosure;
+
+impl PairState for NoClosure {
+    #[inline(always)]
+    fn dr(&self, _: usize) -> PairDr {
+        [0.0; 2]
+    }
+    #[inline(always)]
+    fn near(&mut self, _: usize, _: bool) {}
+    #[inline(always)]
+    fn keep(&mut self, _: usize, _: f64, _: f64, _: f64) {}
+}
+
+/// The multi-contact closure: this step's radius changes in, the pairs' state out.
+struct ClosureState<'a> {
+    dr: &'a [PairDr],
+    hist: &'a mut [PairHist],
+}
+
+impl PairState for ClosureState<'_> {
+    #[inline(always)]
+    fn dr(&self, k: usize) -> PairDr {
+        self.dr[k]
+    }
+    #[inline(always)]
+    fn near(&mut self, k: usize, near: bool) {
+        self.hist[k].near = near;
+    }
+    #[inline(always)]
+    fn keep(&mut self, k: usize, fnorm: f64, ri: f64, rj: f64) {
+        let h = &mut self.hist[k];
+        (h.fn_prev, h.ri_prev, h.rj_prev) = (fnorm, ri, rj);
     }
 }
 
