@@ -1691,33 +1691,14 @@ impl World {
             step: self.step,
             liggghts_radii: self.liggghts_radii,
         };
-        let mut out = Vec::new();
-        let mut o = PairOut::default();
         let np = self.pairs.len();
         let mc = self.closure == Some(Closure::MultiContact)
             && self.pair_hist.len() == np
             && self.pair_dr.len() == np;
-        let mut state = ClosureState { dr: &self.pair_dr, hist: &mut self.pair_hist };
-        for (k, pr) in self.pairs.iter_mut().enumerate() {
-            if mc { ctx.eval(pr, k, &mut state, &mut o) } else { ctx.eval(pr, k, &mut NoClosure, &mut o) }
-                .map_err(|e| *e)?;
-            if o.force == Vec3::zeros() {
-                continue;
-            }
-            let (i, j) = (pr.i as usize, pr.j as usize);
-            let raw = self.p.x[i] - self.p.x[j];
-            let mut branch = raw;
-            domain.minimum_image(&mut branch);
-            out.push(PairContact {
-                i,
-                j,
-                branch,
-                periodic: branch != raw,
-                force: o.force,
-                torque: o.torque_i,
-            });
-        }
-        Ok(out)
+        let closure = mc.then_some((&self.pair_dr[..], &mut self.pair_hist[..]));
+        let mut touching = Touching { x: &self.p.x, domain, out: Vec::new() };
+        ctx.pass(&mut self.pairs, closure, false, &mut touching).map_err(|e| *e)?;
+        Ok(touching.out)
     }
 
     /// Particle–particle contacts carrying a force at the last force pass (set-up pass included).
@@ -1728,7 +1709,7 @@ impl World {
     /// Contacts carrying a normal force at the last force pass: (particle pairs, particle–wall).
     /// Under Hertz, which keeps no normal force per pair, the pairs carrying a force.
     pub fn contact_counts(&self) -> (usize, usize) {
-        let pp = if self.pair_hist.len() == self.pairs.len() && !self.pairs.is_empty() {
+        let pp = if self.pair_hist.len() == self.pairs.len() {
             self.pair_hist.iter().filter(|h| h.fn_prev > 0.0).count()
         } else {
             self.pair_contacts()
@@ -1954,6 +1935,32 @@ impl PairSink for Keep<'_> {
     fn put(&mut self, k: usize, _i: usize, _j: usize, o: &PairOut) {
         self.outs[k] = *o;
         self.force[k] = o.force;
+    }
+}
+
+/// [`World::touching_pairs`]: every pair carrying a force, with its branch vector.
+struct Touching<'a> {
+    x: &'a [Vec3],
+    domain: Domain,
+    out: Vec<PairContact>,
+}
+
+impl PairSink for Touching<'_> {
+    fn put(&mut self, _k: usize, i: usize, j: usize, o: &PairOut) {
+        if o.force == Vec3::zeros() {
+            return;
+        }
+        let raw = self.x[i] - self.x[j];
+        let mut branch = raw;
+        self.domain.minimum_image(&mut branch);
+        self.out.push(PairContact {
+            i,
+            j,
+            branch,
+            periodic: branch != raw,
+            force: o.force,
+            torque: o.torque_i,
+        });
     }
 }
 
