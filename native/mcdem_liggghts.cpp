@@ -1136,6 +1136,8 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
         if (fi->has_inserted()) inserters.push_back(fi);
     }
 
+    const bool no_inserters = inserters.empty();
+
     std::memset(&sidata, 0, sizeof(SurfacesIntersectData));
     std::memset(&i_forces, 0, sizeof(ForceData));
     std::memset(&j_forces, 0, sizeof(ForceData));
@@ -1174,7 +1176,14 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
             }
             const double radi = radius[i] + dri, radj = radius[j] + drj;
             const double radsum = radi + radj;
-            if (batched && rsq < radsum * radsum && !((mask[i] | mask[j]) & freeze_bit)) {
+            const double reach_sq = radsum * radsum;
+            if (rsq >= reach_sq) {
+                // Apart, and beyond the contact distance: the library's loop does nothing with the
+                // pair either (no sub-model call, no output) except copy an inserted history.
+                // Most neighbour pairs are of this kind (the skin), so they leave before the
+                // per-pair set-up below.
+                if (no_inserters && rsq >= close_sq * reach_sq) continue;
+            } else if (batched && !((mask[i] | mask[j]) & freeze_bit)) {
                 batch.push(i, j, jj, del, dri, drj);
                 continue;
             }
@@ -1185,7 +1194,8 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
             sidata.rsq = rsq;
             sidata.contact_flags = flags ? &flags[jj] : NULL;
             sidata.contact_history = hist ? &hist[dnum * jj] : NULL;
-            for (size_t k = 0; k < inserters.size(); k++) inserters[k]->copy_history(i, j, sidata.contact_history);
+            if (!no_inserters)
+                for (size_t k = 0; k < inserters.size(); k++) inserters[k]->copy_history(i, j, sidata.contact_history);
             i_forces.reset();
             j_forces.reset();
             sidata.v_i = v[i];
