@@ -1194,8 +1194,7 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
             sidata.rsq = rsq;
             sidata.contact_flags = flags ? &flags[jj] : NULL;
             sidata.contact_history = hist ? &hist[dnum * jj] : NULL;
-            if (!no_inserters)
-                for (size_t k = 0; k < inserters.size(); k++) inserters[k]->copy_history(i, j, sidata.contact_history);
+            for (size_t k = 0; k < inserters.size(); k++) inserters[k]->copy_history(i, j, sidata.contact_history);
             i_forces.reset();
             j_forces.reset();
             sidata.v_i = v[i];
@@ -1203,7 +1202,7 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
             sidata.itype = type[i];
             sidata.jtype = type[j];
 
-            if (rsq < radsum * radsum && cmodel.checkSurfaceIntersect(sidata)) {
+            if (rsq < reach_sq && cmodel.checkSurfaceIntersect(sidata)) {
                 const double r = std::sqrt(rsq);
                 const double rinv = 1.0 / r;
                 double mi = rmass ? rmass[i] : mass[type[i]];
@@ -1228,7 +1227,7 @@ void mc_pair_loop(LAMMPS *lmp, Model &cmodel, SurfacesIntersectData &sidata, For
                 cmodel.surfacesIntersect(sidata, i_forces, j_forces);
                 cmodel.endSurfacesIntersect(sidata, 0, i_forces, j_forces);
                 sidata.has_force_update = true;
-            } else if (rsq < close_sq * radsum * radsum && !atom->shapetype_flag) {
+            } else if (rsq < close_sq * reach_sq && !atom->shapetype_flag) {
                 sidata.has_force_update = false;
                 cmodel.surfacesClose(sidata, i_forces, j_forces);
             } else {
