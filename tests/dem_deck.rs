@@ -236,7 +236,8 @@ fn deck_failures_say_whether_the_engine_stopped() {
 
 /// `--threads-mode` fixes the choice the timing probe otherwise makes; a bad value is refused by
 /// name, and on the hydrogel deck (514 spheres, walls and a mesh piston: every threaded pass runs)
-/// the piston force on two forced threads is the serial one, byte for byte.
+/// the piston force on two forced threads is the serial one, byte for byte, and the `Loop time`
+/// lines say how many steps were threaded (none, all).
 #[test]
 fn threads_mode_is_checked_and_changes_no_result() {
     let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--threads-mode", "sometimes"]);
@@ -268,9 +269,24 @@ fn threads_mode_is_checked_and_changes_no_result() {
             .output()
             .unwrap();
         assert!(o.status.success(), "{mode}: {}", String::from_utf8_lossy(&o.stderr));
-        std::fs::read(out).unwrap()
+        // The share of threaded steps, from every `Loop time` line of the run.
+        let log = String::from_utf8_lossy(&o.stdout).into_owned();
+        let shares: Vec<f64> = log
+            .lines()
+            .filter(|l| l.starts_with("Loop time of"))
+            .map(|l| {
+                let (_, rest) = l.split_once("threaded in ").unwrap_or_else(|| panic!("{mode}: {l}"));
+                rest.split_once(" %").unwrap().0.parse().unwrap()
+            })
+            .collect();
+        assert!(!shares.is_empty(), "{mode}: no Loop time line in\n{log}");
+        (std::fs::read(out).unwrap(), shares)
     };
-    let serial = piston("serial");
+    let (serial, shares) = piston("serial");
     assert!(serial.len() > 1000, "piston output too short");
-    assert!(piston("parallel") == serial, "two forced threads changed the piston force");
+    assert!(shares.iter().all(|&s| s == 0.0), "serial mode says it threaded: {shares:?}");
+    let (parallel, shares) = piston("parallel");
+    assert!(parallel == serial, "two forced threads changed the piston force");
+    // Forced threads run every step's pair pass on them (the deck has ~2 000 pairs: two blocks).
+    assert!(shares.iter().all(|&s| s == 100.0), "parallel mode left steps serial: {shares:?}");
 }

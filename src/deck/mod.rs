@@ -1815,6 +1815,7 @@ impl Deck {
         let builds0 = self.world.builds;
         let updates0 = self.world.mc_influence_updates();
         let passes0 = self.world.mc_updates;
+        let threaded0 = self.world.threaded_passes();
         while self.world.step < end {
             self.world.step().map_err(|e| {
                 let m = e.to_string();
@@ -1864,9 +1865,20 @@ impl Deck {
                 self.world.mc_updates - passes0
             );
         }
+        // The engine times steps with and without its threads and keeps the faster (results
+        // are the same bits either way): say how often the threads were used.
+        let threads = rayon::current_num_threads();
+        let used = if threads > 1 {
+            let (a, b) = self.world.threaded_passes();
+            let passes = (a + b) - (threaded0.0 + threaded0.1);
+            // (The run's set-up pass counts too: at most 100 %.)
+            let pct = (100.0 * passes as f64 / (nsteps as f64).max(1.0)).min(100.0);
+            format!(" (threaded in {pct:.0} % of steps)")
+        } else {
+            String::new()
+        };
         self.say(&format!(
-            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {} threads, {} neighbour builds{approx})\n",
-            rayon::current_num_threads(),
+            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {threads} threads{used}, {} neighbour builds{approx})\n",
             self.world.builds - builds0
         ));
         Ok(())
