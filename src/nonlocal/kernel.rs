@@ -38,10 +38,12 @@
 //! Σ_{n≥1} P_n/(n(n+1)) = 1 − 2 ln(1+s), Σ_{n≥1} P_n/(n(n+1)(n+2)) = s² ln s − (1+s²) ln(1+s) + s + ¼.
 //! The remainder, with O(n⁻⁴) coefficients, is summed to [`SPHERE_TERMS`] terms (truncation
 //! < 1e−10) with its derivative, once per ν, on a uniform grid of [`SPHERE_GRID`] intervals in s,
-//! and evaluated by cubic Hermite interpolation (C¹); the singular part is evaluated analytically.
+//! and evaluated by cubic Hermite interpolation (C¹); the singular part (1/s, ln s) is evaluated
+//! analytically.
 //! Tables are built lazily, cached per ν (bit pattern) for the life of the process, with a
-//! per-thread last-used entry in front, so an evaluation is a lookup, one cubic and three
-//! logarithms, with no allocation.
+//! per-thread last-used entry in front. The smooth closed forms (in ln(1 + s)) are tabulated with
+//! the remainder, so an evaluation is a lookup, one cubic and one logarithm (ln s), with no
+//! allocation.
 //!
 //! **Kernel.** G(μ) = γ g(μ) / (E R): the field of the load at k alone, not of k's diametric
 //! pair. For a particle in equilibrium (Σ_k P_k e_k = 0) the n = 1 reactions of all its loads
@@ -348,7 +350,9 @@ fn sphere_asymptotics(nu: f64) -> [f64; 4] {
 
 /// Closed-form sums of the subtracted asymptotic series at s = sin(θ/2) > 0, and their
 /// s-derivatives: Σ P_n = 1/(2s), Σ P_n/n, Σ P_n/(n(n+1)), Σ P_n/(n(n+1)(n+2)) (sums from n = 1
-/// except the first).
+/// except the first). The kernel evaluates them split in two ([`sphere_singular`],
+/// [`sphere_smooth`]); this whole form is the check of that split.
+#[cfg(test)]
 fn sphere_closed_forms(s: f64) -> ([f64; 4], [f64; 4]) {
     let l1 = s.ln_1p();
     let ls = s.ln();
@@ -362,12 +366,29 @@ fn sphere_closed_forms(s: f64) -> ([f64; 4], [f64; 4]) {
     (v, d)
 }
 
-/// The values of [`sphere_closed_forms`] alone.
+/// The singular part of Σ_k asym_k · (closed form k) at s > 0, and its s-derivative: the terms
+/// in 1/s and ln s, evaluated analytically (one logarithm).
 #[inline]
-fn sphere_closed_form_values(s: f64) -> [f64; 4] {
-    let l1 = s.ln_1p();
+fn sphere_singular([a, b, _, e]: [f64; 4], s: f64) -> (f64, f64) {
     let ls = s.ln();
-    [0.5 / s, -(ls + l1), 1.0 - 2.0 * l1, s * s * ls - (1.0 + s * s) * l1 + s + 0.25]
+    (a * (0.5 / s) - b * ls + e * (s * s * ls), -a * (0.5 / (s * s)) - b / s + e * (2.0 * s * ls + s))
+}
+
+/// The values of [`sphere_singular`] alone.
+#[inline]
+fn sphere_singular_value([a, b, _, e]: [f64; 4], s: f64) -> f64 {
+    let ls = s.ln();
+    a * (0.5 / s) - b * ls + e * (s * s * ls)
+}
+
+/// The rest of the closed forms, smooth on [0, 1] (polynomials and ln(1 + s)), and its
+/// s-derivative: tabulated with the series remainder, so that an evaluation takes one logarithm
+/// instead of two (`ln_1p` was a tenth of the nonlocal `sphere` run).
+fn sphere_smooth([_, b, c, e]: [f64; 4], s: f64) -> (f64, f64) {
+    let l1 = s.ln_1p();
+    let v = -b * l1 + c * (1.0 - 2.0 * l1) + e * (-(1.0 + s * s) * l1 + s + 0.25);
+    let d = -b / (1.0 + s) - 2.0 * c / (1.0 + s) + e * (-2.0 * s * l1 - (1.0 + s * s) / (1.0 + s) + 1.0);
+    (v, d)
 }
 
 /// The tabulated smooth remainder of the sphere kernel for one ν.
@@ -375,7 +396,8 @@ struct SphereTable {
     asym: [f64; 4],
     /// The n = 1 coefficient (rigid translation) that makes the regular self term vanish.
     d1: f64,
-    /// Remainder Σ ρ_n P_n(1 − 2s²) and its s-derivative at s_j = j / SPHERE_GRID.
+    /// Remainder Σ ρ_n P_n(1 − 2s²) plus the smooth closed forms ([`sphere_smooth`]), and its
+    /// s-derivative, at s_j = j / SPHERE_GRID.
     val: Box<[f64]>,
     der: Box<[f64]>,
 }
@@ -428,8 +450,11 @@ impl SphereTable {
                 let d2 = d0 + (2.0 * x + 1.0) * p1;
                 (p0, p1, d0, d1) = (p1, p2, d1, d2);
             }
-            val[j] = sv;
-            der[j] = sd * (-4.0 * s);
+            // The smooth closed forms join the remainder (a cubic interpolates ln(1 + s) on this
+            // grid to ~1e-14: its fourth derivative is at most 6).
+            let (mv, md) = sphere_smooth(asym, s);
+            val[j] = sv + mv;
+            der[j] = sd * (-4.0 * s) + md;
         }
         Self { asym, d1, val: val.into_boxed_slice(), der: der.into_boxed_slice() }
     }
@@ -466,25 +491,15 @@ impl SphereTable {
         let drem =
             ((6.0 * t2 - 6.0 * t) * (v0 - v1) + (3.0 * t2 - 4.0 * t + 1.0) * m0 + (3.0 * t2 - 2.0 * t) * m1)
                 * SPHERE_GRID as f64;
-        let (cf, dcf) = sphere_closed_forms(s);
-        let mut g = rem;
-        let mut dg = drem;
-        for k in 0..4 {
-            g += self.asym[k] * cf[k];
-            dg += self.asym[k] * dcf[k];
-        }
-        (g, dg)
+        let (sg, dsg) = sphere_singular(self.asym, s);
+        (rem + sg, drem + dsg)
     }
 
     /// g alone at s ∈ (0, 1] (the same value as `eval(s).0`).
     #[inline]
     fn value(&self, s: f64) -> f64 {
         let (t, c) = self.cell(s);
-        let mut g = Self::hermite(t, c);
-        for (a, cf) in self.asym.iter().zip(sphere_closed_form_values(s)) {
-            g += a * cf;
-        }
-        g
+        Self::hermite(t, c) + sphere_singular_value(self.asym, s)
     }
 }
 
