@@ -368,17 +368,10 @@ fn sphere_closed_forms(s: f64) -> ([f64; 4], [f64; 4]) {
 
 /// The singular part of Σ_k asym_k · (closed form k) at s > 0, and its s-derivative: the terms
 /// in 1/s and ln s, evaluated analytically (one logarithm).
-#[inline]
+#[inline(always)]
 fn sphere_singular([a, b, _, e]: [f64; 4], s: f64) -> (f64, f64) {
     let ls = s.ln();
     (a * (0.5 / s) - b * ls + e * (s * s * ls), -a * (0.5 / (s * s)) - b / s + e * (2.0 * s * ls + s))
-}
-
-/// The values of [`sphere_singular`] alone.
-#[inline]
-fn sphere_singular_value([a, b, _, e]: [f64; 4], s: f64) -> f64 {
-    let ls = s.ln();
-    a * (0.5 / s) - b * ls + e * (s * s * ls)
 }
 
 /// The rest of the closed forms, smooth on [0, 1] (polynomials and ln(1 + s)), and its
@@ -499,7 +492,8 @@ impl SphereTable {
     #[inline]
     fn value(&self, s: f64) -> f64 {
         let (t, c) = self.cell(s);
-        Self::hermite(t, c) + sphere_singular_value(self.asym, s)
+        // The derivative's arithmetic is unused here and drops out once this is inlined.
+        Self::hermite(t, c) + sphere_singular(self.asym, s).0
     }
 }
 
