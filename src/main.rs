@@ -44,8 +44,9 @@ enum Command {
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..=mcdem::deck::MAX_UPDATE_EVERY))]
         mc_update_every: Option<u64>,
         /// Whether a step's force passes use both threads of the pool: `auto` (default) times
-        /// windows of steps each way every 5000 steps and keeps the faster; `serial` and
-        /// `parallel` fix the choice. Results are bit-identical in all three; only speed differs.
+        /// windows of steps each way every 5000 steps (sooner after it chose one core) and keeps
+        /// the faster; `serial` and `parallel` fix the choice. Results are bit-identical in all
+        /// three; only speed differs.
         #[arg(long, value_enum, default_value_t = ThreadsMode::Auto)]
         threads_mode: ThreadsMode,
     },

@@ -11,6 +11,7 @@
 
 pub mod mesh;
 pub mod neighbor;
+mod probe;
 
 use std::cell::RefCell;
 use std::fmt;
@@ -29,6 +30,7 @@ use crate::physics::{Material, PairCoeffs, Vec3};
 use crate::team::{share, SplitMut, Team};
 pub use mesh::Mesh;
 use neighbor::CellList;
+use probe::ThreadProbe;
 
 /// Moment of inertia prefactor of a solid sphere, I = 0.4 m r² (as LIGGGHTS `nve/sphere`).
 const INERTIA: f64 = 0.4;
@@ -497,8 +499,8 @@ pub struct World {
     f_buf: Vec<Vec3>,
     t_buf: Vec<Vec3>,
     parallel: bool,
-    tune_ser_ns: u64,
-    tune_par_ns: u64,
+    /// When `PairThreads::Auto` times steps with and without threads, and what it measured.
+    probe: ThreadProbe,
     /// Whether a step's force passes (pairs, walls, multi-contact kernel) and half-kicks run on
     /// the threads' team (default: decided by the timing probe).
     pub pair_threads: PairThreads,
@@ -516,8 +518,8 @@ pub struct World {
 /// so this only decides speed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum PairThreads {
-    /// Every `TUNE_PERIOD` steps, time windows with and without threads (alternating in slices)
-    /// and keep the faster.
+    /// Time windows of steps with and without threads (alternating in slices) and keep the
+    /// faster: every 5 000 steps, sooner after a choice of one core (`probe.rs`).
     #[default]
     Auto,
     Serial,
@@ -615,27 +617,21 @@ impl World {
     pub fn step(&mut self) -> Result<(), StepError> {
         self.step += 1;
         let dt = self.dt;
-        // Threads pay only when the cores are free: every TUNE_PERIOD steps, time a window of
-        // steps with and without them and keep the faster (results are bit-identical either
-        // way). Whole steps, so that what threading changes outside the threaded passes counts
-        // too, but without the neighbour check: a list build costs the same in both modes and
-        // would weigh on whichever slice it falls in. The two alternate in slices, so that a
-        // passing disturbance (another process, buffers allocated at their first use) is shared
-        // rather than blamed on one. The first steps of a slice are not timed: after a switch
-        // the particles' state sits in the other core's cache (and a parked helper must wake),
-        // which a run that keeps one mode does not pay.
-        let phase = self.step % TUNE_PERIOD;
-        let probe = match self.pair_threads {
-            PairThreads::Auto => phase < 2 * TUNE_WINDOW,
+        // Threads pay only when the cores are free: the probe (`probe.rs`) times windows of whole
+        // steps with and without them and keeps the faster. Whole steps, so that what threading
+        // changes outside the threaded passes counts too, but without the neighbour check: a
+        // list build costs the same in both modes and would weigh on whichever slice it falls in.
+        let plan = match self.pair_threads {
+            PairThreads::Auto => self.probe.plan(self.step),
             fixed => {
                 self.parallel = fixed == PairThreads::Parallel;
-                false
+                None
             }
         };
-        if probe {
-            self.parallel = (phase / TUNE_SLICE) % 2 == 1;
+        if let Some(s) = plan {
+            self.parallel = s.threads;
         }
-        let t0 = (probe && phase % TUNE_SLICE >= TUNE_SETTLE).then(std::time::Instant::now);
+        let t0 = plan.filter(|s| s.timed).map(|_| std::time::Instant::now());
         if self.integrate {
             self.initial_integrate();
         }
@@ -661,15 +657,8 @@ impl World {
         }
         if let Some(t0) = t0 {
             let ns = t0.elapsed().saturating_sub(check).as_nanos() as u64;
-            if self.parallel {
-                self.tune_par_ns += ns;
-            } else {
-                self.tune_ser_ns += ns;
-            }
-            if phase == 2 * TUNE_WINDOW - 1 {
-                self.parallel = self.tune_par_ns < self.tune_ser_ns;
-                self.tune_par_ns = 0;
-                self.tune_ser_ns = 0;
+            if let Some(threads) = self.probe.record(self.step, self.parallel, ns) {
+                self.parallel = threads;
             }
         }
         Ok(())
@@ -1757,16 +1746,8 @@ impl World {
 /// model's range (Eq. 3 caps each neighbour term at MPR r, about 0.1 r).
 const RECEIVER_GAP: f64 = 0.1;
 
-/// Steps between two serial-vs-threads timing probes, the steps each probe times in each mode,
-/// and the slices in which the modes alternate.
-const TUNE_PERIOD: u64 = 5000;
-const TUNE_WINDOW: u64 = 50;
-const TUNE_SLICE: u64 = 10;
-/// Steps at the start of each probe slice that are not timed.
-const TUNE_SETTLE: u64 = 2;
-
 /// Steps after which the first serial-vs-threads probe has decided (benchmarks warm up this long).
-pub const THREAD_PROBE_STEPS: u64 = 2 * TUNE_WINDOW;
+pub const THREAD_PROBE_STEPS: u64 = 2 * probe::WINDOW;
 
 /// Fewest pairs in a block of the threaded pair pass, and most blocks (block indices are kept
 /// in a `u16` per particle).
