@@ -11,10 +11,10 @@
 //! A choice of threads stands for [`PERIOD`] steps. A choice of one core is looked at again
 //! sooner, after [`RETRY`] steps and then twice as long each time up to [`PERIOD`]: the windows
 //! at the start of a run are the ones disturbances push towards one core. On the 514-particle
-//! hydrogel deck the threaded slices of the very first window ran at 230–310 µs per step against
-//! 45–60 µs in every later window (the new helper thread still shared its core with the stepping
-//! thread), so the first window chose one core and the run kept it for 5 000 steps, 17 % of a
-//! 30 000-step stroke.
+//! hydrogel deck, in two of three logged runs, the threaded slices of the very first window ran
+//! at 230–310 µs per step against 45–60 µs in every later window (a transient of the first 50–60
+//! steps after the team starts), so the first window chose one core and the run kept it for
+//! 5 000 steps, 17 % of a 30 000-step stroke.
 
 /// Steps between two windows after a choice of threads (and the longest wait after one core).
 pub const PERIOD: u64 = 5000;
