@@ -102,7 +102,7 @@ impl ThreadProbe {
 mod tests {
     use super::*;
 
-    /// Steps 1.. through the probe with the given time per step in each mode; returns the steps at
+    /// Steps `first`.. through the probe with the given time per step in each mode; returns the steps at
     /// which windows closed, with their choice.
     fn drive(steps: u64, first: u64, serial_ns: u64, threads_ns: impl Fn(u64) -> u64) -> Vec<(u64, bool)> {
         let mut p = ThreadProbe::default();
