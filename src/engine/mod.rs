@@ -657,7 +657,7 @@ impl World {
         }
         if let Some(t0) = t0 {
             let ns = t0.elapsed().saturating_sub(check).as_nanos() as u64;
-            if let Some(threads) = self.probe.record(self.step, self.parallel, ns) {
+            if let Some(threads) = self.probe.record(self.step, ns) {
                 self.parallel = threads;
             }
         }

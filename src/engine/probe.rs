@@ -70,12 +70,12 @@ impl ThreadProbe {
         Some(ProbeStep { threads: (phase / SLICE) % 2 == 1, timed: phase % SLICE >= SETTLE })
     }
 
-    /// Adds the time of a timed step (of the window [`ThreadProbe::plan`] placed it in); at the
-    /// window's last step returns the choice (threads when their median slice was faster) and
-    /// schedules the next window.
-    pub fn record(&mut self, step: u64, threads: bool, ns: u64) -> Option<bool> {
+    /// Adds the time of a timed step (of the window [`ThreadProbe::plan`] placed it in, which
+    /// also says its mode: odd slices run on the threads); at the window's last step returns the
+    /// choice (threads when their median slice was faster) and schedules the next window.
+    pub fn record(&mut self, step: u64, ns: u64) -> Option<bool> {
         let slice = ((step - self.start) / SLICE) as usize;
-        self.slice_ns[usize::from(threads)][slice / 2] += ns;
+        self.slice_ns[slice % 2][slice / 2] += ns;
         if step != self.start + 2 * WINDOW - 1 {
             return None;
         }
@@ -102,8 +102,8 @@ impl ThreadProbe {
 mod tests {
     use super::*;
 
-    /// Steps `first`.. through the probe with the given time per step in each mode; returns the steps at
-    /// which windows closed, with their choice.
+    /// Steps `first`.. through the probe with the given time per step in each mode; returns the
+    /// steps at which windows closed, with their choice.
     fn drive(steps: u64, first: u64, serial_ns: u64, threads_ns: impl Fn(u64) -> u64) -> Vec<(u64, bool)> {
         let mut p = ThreadProbe::default();
         let mut out = Vec::new();
@@ -111,7 +111,7 @@ mod tests {
             if let Some(s) = p.plan(step) {
                 if s.timed {
                     let ns = if s.threads { threads_ns(step) } else { serial_ns };
-                    if let Some(c) = p.record(step, s.threads, ns) {
+                    if let Some(c) = p.record(step, ns) {
                         out.push((step, c));
                     }
                 }
