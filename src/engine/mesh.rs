@@ -1,21 +1,59 @@
-//! Triangle-mesh walls: STL reading (ASCII and binary), rigid translation, and the closest point
-//! of a triangle to a particle centre with LIGGGHTS' edge/corner activity rule.
+//! Triangle-mesh walls: STL reading (ASCII and binary), rigid motion, and the contacts of a sphere
+//! with a mesh surface, each counted exactly once wherever its closest point lies.
 //!
-//! Why the activity rule: a sphere above the shared edge of two coplanar triangles would otherwise
-//! touch both and feel the wall twice. An edge (corner) shared only by coplanar triangles is
-//! inactive: a closest point there is ignored, because the neighbouring triangle reports the same
-//! contact as a face contact.
+//! The rule (one test per contact, no tie-breaks that depend on the triangle order): the closest
+//! point q of a triangle to a particle centre p is a contact of the mesh only if it is a local
+//! minimum of the distance over the whole surface, i.e. no neighbouring element lies "under" the
+//! direction d = p − q:
+//! - a point inside the face is always one;
+//! - a point on an edge is one unless d leans, beyond a round-off band, into a triangle that shares
+//!   the edge (then that triangle reports the contact, as a face, edge or corner of its own);
+//! - a point on a corner is one unless d leans along any edge that leaves the corner.
+//!
+//! Points exactly on a shared edge or corner (a sphere centred over the diagonal of a split plate, a
+//! lattice over a mesh seam, a ridge) are found by every triangle that shares it, at the same place:
+//! the caller keeps one of those (`Mesh::same_contact`), preferring the face over an edge over a
+//! corner. This replaces LIGGGHTS' "active edge" flags, which here had three holes: an edge shared
+//! by coplanar triangles was ignored by both when the point sat exactly on it, the outer corners of a
+//! flat mesh were ignored by both triangles sharing them, and a convex ridge counted twice.
 
 use std::collections::HashMap;
 
 use crate::physics::Vec3;
 
-/// One triangle of a mesh with the activity flags of its edges (ab, bc, ca) and corners (a, b, c).
+/// Relative width of the band within which a direction counts as perpendicular to an edge or as
+/// exactly above it: the closest-point arithmetic loses a few ulps of the coordinates, so a point
+/// meant to lie on an edge can come out 1e-16 relative to either side. 1e-10 of the distance is far
+/// above that round-off and far below any geometry a contact law resolves.
+const ON_EDGE_BAND: f64 = 1e-10;
+
+/// Index range into one of a mesh's direction pools.
+#[derive(Debug, Clone, Copy, Default)]
+struct Span {
+    start: u32,
+    len: u32,
+}
+
+impl Span {
+    #[inline]
+    fn of<'a, T>(&self, pool: &'a [T]) -> &'a [T] {
+        &pool[self.start as usize..(self.start + self.len) as usize]
+    }
+}
+
+/// One triangle of a mesh with the neighbourhood its contact test reads.
 #[derive(Debug, Clone)]
 pub struct Triangle {
     pub v: [Vec3; 3],
-    pub edge_active: [bool; 3],
-    pub corner_active: [bool; 3],
+    /// Per edge (ab, bc, ca): the in-plane unit normals, pointing away from the edge into each
+    /// other triangle that shares it (`Mesh::edge_dirs`).
+    edge_nbrs: [Span; 3],
+    /// Per corner (a, b, c): the unit directions of every mesh edge that leaves it
+    /// (`Mesh::corner_dirs`).
+    corner_edges: [Span; 3],
+    /// Triangles that share at least a vertex with this one and lie in its plane
+    /// (`Mesh::coplanar`): a contact moving between them keeps its history.
+    coplanar: Span,
 }
 
 /// A rigid mesh wall: geometry, translational velocity (set by `fix move/mesh … linear`) and the
@@ -33,6 +71,18 @@ pub struct Mesh {
     /// Axis-aligned bounding box, refreshed when the mesh moves (cheap rejection of far particles).
     pub bb_lo: Vec3,
     pub bb_hi: Vec3,
+    edge_dirs: Vec<Vec3>,
+    corner_dirs: Vec<Vec3>,
+    coplanar: Vec<u32>,
+}
+
+/// Where on its triangle a contact point lies; a contact found by several triangles keeps the
+/// lowest (a face point is the plane's own projection, the most exact of the three).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Feature {
+    Face,
+    Edge,
+    Corner,
 }
 
 /// Where on the triangle the closest point lies.
@@ -105,7 +155,8 @@ fn parse_binary_stl(b: &[u8]) -> Result<Vec<[Vec3; 3]>, String> {
 }
 
 impl Mesh {
-    /// Builds the mesh and the activity flags. Degenerate triangles are an error (no normal).
+    /// Builds the mesh and the neighbourhood of every triangle. Degenerate triangles are an error
+    /// (no normal).
     pub fn new(name: &str, wall_type: usize, raw: Vec<[Vec3; 3]>) -> Result<Self, String> {
         if raw.is_empty() {
             return Err(format!("mesh {name}: no triangles"));
@@ -129,33 +180,72 @@ impl Mesh {
             let q = |x: f64| (x / scale * 1e9).round() as i64;
             (q(v.x), q(v.y), q(v.z))
         };
-        let mut vert_tris: HashMap<(i64, i64, i64), Vec<usize>> = HashMap::new();
-        for (k, t) in raw.iter().enumerate() {
-            for v in t {
-                vert_tris.entry(key(v)).or_default().push(k);
+        let mut ids: HashMap<(i64, i64, i64), u32> = HashMap::new();
+        let vid: Vec<[u32; 3]> = raw
+            .iter()
+            .map(|t| {
+                t.map(|v| {
+                    let next = ids.len() as u32;
+                    *ids.entry(key(&v)).or_insert(next)
+                })
+            })
+            .collect();
+        let mut vert_tris: Vec<Vec<u32>> = vec![Vec::new(); ids.len()];
+        for (k, t) in vid.iter().enumerate() {
+            for &v in t {
+                vert_tris[v as usize].push(k as u32);
             }
         }
-        let coplanar = |a: usize, b: usize| normals[a].dot(&normals[b]).abs() > 1.0 - 1e-8;
+        let coplanar_with = |a: usize, b: usize| normals[a].dot(&normals[b]).abs() > 1.0 - 1e-8;
+        let (mut edge_dirs, mut corner_dirs, mut coplanar) = (Vec::new(), Vec::new(), Vec::new());
+        let span =
+            |pool_len: usize, start: usize| Span { start: start as u32, len: (pool_len - start) as u32 };
         let mut tris = Vec::with_capacity(raw.len());
         for (k, t) in raw.iter().enumerate() {
-            let mut edge_active = [true; 3];
-            for (e, flag) in edge_active.iter_mut().enumerate() {
-                let (ka, kb) = (key(&t[e]), key(&t[(e + 1) % 3]));
-                let sa = &vert_tris[&ka];
-                let sb = &vert_tris[&kb];
-                let shared: Vec<usize> = sa.iter().copied().filter(|o| *o != k && sb.contains(o)).collect();
-                if !shared.is_empty() && shared.iter().all(|&o| coplanar(k, o)) {
-                    *flag = false;
+            let mut edge_nbrs = [Span::default(); 3];
+            for (e, s) in edge_nbrs.iter_mut().enumerate() {
+                let (va, vb) = (vid[k][e], vid[k][(e + 1) % 3]);
+                let (a, b) = (t[e], t[(e + 1) % 3]);
+                let along = (b - a).normalize();
+                let start = edge_dirs.len();
+                for &o in &vert_tris[va as usize] {
+                    let o = o as usize;
+                    if o == k || !vid[o].contains(&vb) {
+                        continue;
+                    }
+                    // The other triangle's third vertex, seen from the edge, in its own plane.
+                    let c = (0..3).find(|&m| vid[o][m] != va && vid[o][m] != vb).map(|m| raw[o][m]);
+                    if let Some(c) = c {
+                        let off = (c - a) - along * along.dot(&(c - a));
+                        edge_dirs.push(off.normalize());
+                    }
                 }
+                *s = span(edge_dirs.len(), start);
             }
-            let mut corner_active = [true; 3];
-            for (c, flag) in corner_active.iter_mut().enumerate() {
-                let s = &vert_tris[&key(&t[c])];
-                if s.len() > 1 && s.iter().all(|&o| coplanar(k, o)) {
-                    *flag = false;
+            let mut corner_edges = [Span::default(); 3];
+            for (c, s) in corner_edges.iter_mut().enumerate() {
+                let vc = vid[k][c];
+                let start = corner_dirs.len();
+                let mut seen: Vec<u32> = Vec::new();
+                for &o in &vert_tris[vc as usize] {
+                    for m in 0..3 {
+                        let w = vid[o as usize][m];
+                        if w != vc && !seen.contains(&w) {
+                            seen.push(w);
+                            corner_dirs.push((raw[o as usize][m] - t[c]).normalize());
+                        }
+                    }
                 }
+                *s = span(corner_dirs.len(), start);
             }
-            tris.push(Triangle { v: *t, edge_active, corner_active });
+            let start = coplanar.len();
+            let mut near: Vec<u32> =
+                vid[k].iter().flat_map(|&v| vert_tris[v as usize].iter().copied()).collect();
+            near.sort_unstable();
+            near.dedup();
+            coplanar.extend(near.into_iter().filter(|&o| o as usize != k && coplanar_with(k, o as usize)));
+            let coplanar_span = span(coplanar.len(), start);
+            tris.push(Triangle { v: *t, edge_nbrs, corner_edges, coplanar: coplanar_span });
         }
         let mut m = Mesh {
             name: name.to_string(),
@@ -166,9 +256,51 @@ impl Mesh {
             stress: false,
             bb_lo: Vec3::zeros(),
             bb_hi: Vec3::zeros(),
+            edge_dirs,
+            corner_dirs,
+            coplanar,
         };
         m.update_bbox();
         Ok(m)
+    }
+
+    /// The contact of triangle `t` with a sphere centred at `p`: its closest point and where on the
+    /// triangle it lies, or `None` when that point is not a local minimum of the distance over the
+    /// mesh (a neighbouring element reports the contact; see the module's doc).
+    #[inline]
+    pub fn contact(&self, t: usize, p: &Vec3) -> Option<(Vec3, Feature)> {
+        let tri = &self.tris[t];
+        let (q, region) = closest_on_triangle(&tri.v[0], &tri.v[1], &tri.v[2], p);
+        let (dirs, feature) = match region {
+            Region::Face => return Some((q, Feature::Face)),
+            Region::Edge(e) => (tri.edge_nbrs[e].of(&self.edge_dirs), Feature::Edge),
+            Region::Corner(c) => (tri.corner_edges[c].of(&self.corner_dirs), Feature::Corner),
+        };
+        let d = p - q;
+        let band = self.band(p, d.norm());
+        dirs.iter().all(|u| u.dot(&d) <= band).then_some((q, feature))
+    }
+
+    /// Do two contact points found for the same sphere (centre distance `dist`) by two triangles
+    /// of this mesh stand for one contact? They do when they coincide to within the band that
+    /// `contact` allows on either side of an edge.
+    #[inline]
+    pub fn same_contact(&self, p: &Vec3, q1: &Vec3, q2: &Vec3, dist: f64) -> bool {
+        (q1 - q2).norm() <= 4.0 * self.band(p, dist)
+    }
+
+    /// Triangles in the plane of `t` that share a vertex with it.
+    #[inline]
+    pub fn coplanar_neighbours(&self, t: usize) -> &[u32] {
+        self.tris[t].coplanar.of(&self.coplanar)
+    }
+
+    /// Length below which an offset from an edge is round-off: the band relative to the distance,
+    /// plus the round-off of the coordinates themselves (a few ulps of the largest).
+    #[inline]
+    fn band(&self, p: &Vec3, dist: f64) -> f64 {
+        let coords = p.amax().max(self.bb_lo.amax()).max(self.bb_hi.amax());
+        ON_EDGE_BAND * dist + 64.0 * f64::EPSILON * coords
     }
 
     fn update_bbox(&mut self) {
@@ -212,6 +344,9 @@ impl Mesh {
                 *v = rot * *v;
             }
         }
+        for u in self.edge_dirs.iter_mut().chain(self.corner_dirs.iter_mut()) {
+            *u = rot * *u;
+        }
         self.update_bbox();
         Ok(())
     }
@@ -221,6 +356,11 @@ impl Mesh {
         for t in &mut self.tris {
             for v in &mut t.v {
                 *v *= s;
+            }
+        }
+        if s < 0.0 {
+            for u in self.edge_dirs.iter_mut().chain(self.corner_dirs.iter_mut()) {
+                *u = -*u;
             }
         }
         self.update_bbox();
@@ -233,26 +373,15 @@ impl Mesh {
     }
 }
 
-/// Closest point of triangle `t` to `p`, or `None` when it lies on an inactive edge or corner.
-#[inline]
-pub fn closest_point(t: &Triangle, p: &Vec3) -> Option<Vec3> {
-    let (q, region) = closest_on_triangle(&t.v[0], &t.v[1], &t.v[2], p);
-    let active = match region {
-        Region::Face => true,
-        Region::Edge(e) => t.edge_active[e],
-        Region::Corner(c) => t.corner_active[c],
-    };
-    active.then_some(q)
-}
-
-/// Squared distance from `p` to triangle `t`, active edges or not.
+/// Squared distance from `p` to triangle `t` (whether or not its closest point is a contact).
 #[inline]
 pub fn distance_squared(t: &Triangle, p: &Vec3) -> f64 {
     (closest_on_triangle(&t.v[0], &t.v[1], &t.v[2], p).0 - p).norm_squared()
 }
 
 /// Closest point on triangle abc to p with the Voronoi region it lies in (Ericson, Real-Time
-/// Collision Detection, 5.1.5). Edges are numbered ab = 0, bc = 1, ca = 2.
+/// Collision Detection, 5.1.5). Edges are numbered ab = 0, bc = 1, ca = 2. A point exactly above
+/// an edge (its barycentric coordinate exactly zero) is a face point, as in LIGGGHTS.
 fn closest_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Vec3, Region) {
     let ab = b - a;
     let ac = c - a;
@@ -269,7 +398,7 @@ fn closest_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Vec3, Region)
         return (*b, Region::Corner(1));
     }
     let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+    if vc < 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
         return (a + ab * v, Region::Edge(0));
     }
@@ -280,12 +409,12 @@ fn closest_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Vec3, Region)
         return (*c, Region::Corner(2));
     }
     let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+    if vb < 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let w = d2 / (d2 - d6);
         return (a + ac * w, Region::Edge(2));
     }
     let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+    if va < 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
         return (b + (c - b) * w, Region::Edge(1));
     }
@@ -299,6 +428,24 @@ fn closest_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Vec3, Region)
 mod tests {
     use super::*;
 
+    /// The contacts of a sphere centred at `p` with mesh `m`, each once (the engine's merge rule:
+    /// a point found by several triangles is one contact).
+    fn contacts(m: &Mesh, p: Vec3) -> Vec<(Vec3, Feature)> {
+        let mut out: Vec<(Vec3, Feature)> = Vec::new();
+        for t in 0..m.tris.len() {
+            if let Some((q, f)) = m.contact(t, &p) {
+                let dist = (p - q).norm();
+                match out.iter_mut().find(|(o, _)| m.same_contact(&p, o, &q, dist)) {
+                    Some(kept) if f < kept.1 => *kept = (q, f),
+                    Some(_) => {}
+                    None => out.push((q, f)),
+                }
+            }
+        }
+        out
+    }
+
+    /// The unit square split along its diagonal (0,0)–(1,1), as the Debian hydrogel piston is.
     fn square() -> Mesh {
         let raw = vec![
             [Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)],
@@ -308,16 +455,90 @@ mod tests {
     }
 
     #[test]
-    fn shared_coplanar_edge_counts_once() {
+    fn a_point_over_the_shared_edge_is_one_face_contact() {
         let m = square();
-        // A point exactly above the diagonal's interior, slightly to one side: one face contact.
-        let p = Vec3::new(0.5, 0.5 + 1e-9, 0.3);
-        let hits: Vec<Vec3> = m.tris.iter().filter_map(|t| closest_point(t, &p)).collect();
-        assert_eq!(hits.len(), 1);
-        assert!((hits[0] - Vec3::new(0.5, 0.5 + 1e-9, 0.0)).norm() < 1e-12);
-        // Outer edges stay active.
-        let q = Vec3::new(1.2, 0.5, 0.0);
-        let hits: Vec<Vec3> = m.tris.iter().filter_map(|t| closest_point(t, &q)).collect();
-        assert_eq!(hits.len(), 1);
+        for s in [0.5, 0.25, 1.0 / 3.0, 0.9] {
+            for off in [0.0, 1e-15, -1e-15, 1e-9, -1e-9] {
+                let p = Vec3::new(s, s + off, 0.3);
+                let hits = contacts(&m, p);
+                assert_eq!(hits.len(), 1, "at {p:?}: {hits:?}");
+                assert_eq!(hits[0].1, Feature::Face, "at {p:?}");
+                assert!((hits[0].0 - Vec3::new(p.x, p.y, 0.0)).norm() < 1e-15, "at {p:?}: {hits:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn outer_corners_and_edges_count_once() {
+        let m = square();
+        // Beyond the corner the diagonal ends at (shared by both triangles) and beyond one that
+        // belongs to one triangle only: the corner itself.
+        for (p, q) in [
+            (Vec3::new(-0.3, -0.2, 0.1), Vec3::new(0.0, 0.0, 0.0)),
+            (Vec3::new(1.3, -0.2, 0.1), Vec3::new(1.0, 0.0, 0.0)),
+            (Vec3::new(-0.1, 1.2, 0.0), Vec3::new(0.0, 1.0, 0.0)),
+        ] {
+            assert_eq!(contacts(&m, p), vec![(q, Feature::Corner)], "at {p:?}");
+        }
+        // Beside an outer edge next to the shared corner: the edge point, not also the corner
+        // (which a triangle not owning that edge sees as its closest point).
+        let hits = contacts(&m, Vec3::new(-0.5, 0.2, 0.1));
+        assert_eq!(hits, vec![(Vec3::new(0.0, 0.2, 0.0), Feature::Edge)]);
+        let hits = contacts(&m, Vec3::new(1.2, 0.5, 0.0));
+        assert_eq!(hits, vec![(Vec3::new(1.0, 0.5, 0.0), Feature::Edge)]);
+    }
+
+    /// A roof of two triangles meeting at the ridge y = 0 (slopes ±30°).
+    fn roof() -> Mesh {
+        let h = 30.0_f64.to_radians().tan();
+        let raw = vec![
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, -1.0, -h)],
+            [Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, -h)],
+        ];
+        Mesh::new("roof", 1, raw).unwrap()
+    }
+
+    #[test]
+    fn a_convex_ridge_counts_once() {
+        let m = roof();
+        // Straight above the ridge: the ridge point, once (both triangles find it).
+        assert_eq!(contacts(&m, Vec3::new(0.4, 0.0, 0.2)), vec![(Vec3::new(0.4, 0.0, 0.0), Feature::Edge)]);
+        // Above one slope, close to the ridge: that slope's face only; the other triangle's ridge
+        // point is not a local minimum of the distance.
+        let p = Vec3::new(0.4, 0.3, 0.1);
+        let hits = contacts(&m, p);
+        assert_eq!(hits.len(), 1, "{hits:?}");
+        assert_eq!(hits[0].1, Feature::Face);
+        assert!((p - hits[0].0).norm() < (p - Vec3::new(0.4, 0.0, 0.0)).norm());
+    }
+
+    #[test]
+    fn a_concave_fold_gives_two_contacts() {
+        // Floor z = 0 (x > 0) and wall x = 0 (z > 0), one mesh folded along the y axis.
+        let raw = vec![
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0)],
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)],
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 1.0)],
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 1.0), Vec3::new(0.0, 0.0, 1.0)],
+        ];
+        let m = Mesh::new("fold", 1, raw).unwrap();
+        let mut hits = contacts(&m, Vec3::new(0.2, 0.5, 0.3));
+        hits.sort_by(|a, b| a.0.x.total_cmp(&b.0.x));
+        assert_eq!(hits.len(), 2, "{hits:?}");
+        for ((q, f), want) in hits.iter().zip([Vec3::new(0.0, 0.5, 0.3), Vec3::new(0.2, 0.5, 0.0)]) {
+            assert_eq!(*f, Feature::Face);
+            assert!((q - want).norm() < 1e-15, "{q:?} vs {want:?}");
+        }
+    }
+
+    #[test]
+    fn directions_follow_a_rotation() {
+        let mut m = square();
+        m.rotate(&Vec3::new(1.0, 0.0, 0.0), 90.0).unwrap();
+        // The plate now lies in y = 0 (z from 0 to 1); beside its outer edge x = 0.
+        let hits = contacts(&m, Vec3::new(-0.5, 0.1, 0.2));
+        assert_eq!(hits.len(), 1, "{hits:?}");
+        assert_eq!(hits[0].1, Feature::Edge);
+        assert!((hits[0].0 - Vec3::new(0.0, 0.0, 0.2)).norm() < 1e-8, "{hits:?}");
     }
 }

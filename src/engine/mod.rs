@@ -12,6 +12,7 @@
 pub mod mesh;
 pub mod neighbor;
 mod probe;
+mod wall_contacts;
 
 use std::cell::RefCell;
 use std::fmt;
@@ -436,6 +437,7 @@ pub struct World {
     pair_hist_old: Vec<PairHist>,
     wc: Vec<WallContact>,
     wc_old: Vec<WallContact>,
+    wc_scratch: wall_contacts::GroupScratch,
     /// Wall elements that may touch a particle before the next candidate build, in the wall scan's
     /// order (`update_wall_contacts`); built at every neighbour build (`wall_cand_builds`) and when
     /// the meshes have moved half a skin since (`wall_travel`).
@@ -1098,36 +1100,14 @@ impl World {
             self.build_wall_candidates(margin);
         }
         std::mem::swap(&mut self.wc, &mut self.wc_old);
-        self.wc.clear();
-        let reach_factor = self.mc_range;
-        let mut k = 0;
-        let p = &self.p;
-        for c in &self.wall_cand {
-            let (i, w) = (c.p as usize, c.wall as usize);
-            let x = p.x[i];
-            let reach = p.radius[i] * reach_factor;
-            match &self.walls[w].geom {
-                WallGeom::Plane(pl) => {
-                    let d = x[pl.axis] - pl.pos;
-                    if d.abs() < reach {
-                        let mut point = x;
-                        point[pl.axis] = pl.pos;
-                        let fresh = WallContact::fresh(i, w, 0, 0, point, Vec3::zeros());
-                        push_merge(&mut self.wc, &self.wc_old, &mut k, fresh);
-                    }
-                }
-                WallGeom::Meshes(_) => {
-                    let (mi, t) = (c.mesh as usize, c.tri as usize);
-                    let m = &self.meshes[mi];
-                    if let Some(q) = mesh::closest_point(&m.tris[t], &x) {
-                        if (x - q).norm_squared() < reach * reach {
-                            let fresh = WallContact::fresh(i, w, mi, t, q, m.velocity);
-                            push_merge(&mut self.wc, &self.wc_old, &mut k, fresh);
-                        }
-                    }
-                }
-            }
-        }
+        let scene = wall_contacts::Scene {
+            walls: &self.walls,
+            meshes: &self.meshes,
+            x: &self.p.x,
+            radius: &self.p.radius,
+            reach_factor: self.mc_range,
+        };
+        wall_contacts::collect(&scene, &self.wall_cand, &self.wc_old, &mut self.wc, &mut self.wc_scratch);
         if self.wc.len() != self.wc_old.len()
             || self.wc.iter().zip(&self.wc_old).any(|(a, b)| a.key() != b.key())
         {
@@ -1221,7 +1201,7 @@ impl World {
     fn multicontact(&mut self) -> Result<(), StepError> {
         // Between updates under `mc_every` the radius changes of the last pass stand: pairs keep
         // theirs by index (valid until the next neighbour build) and wall contacts by key
-        // (`push_merge`).
+        // (`wall_contacts::collect`).
         if self.mc_every > 1
             && self.step < self.mc_due
             && self.builds == self.mc_builds
@@ -2533,23 +2513,6 @@ fn add_outer(s: &mut [[f64; 3]; 3], u: &Vec3, w: &Vec3) {
     }
 }
 
-fn push_merge(out: &mut Vec<WallContact>, old: &[WallContact], k: &mut usize, mut c: WallContact) {
-    let key = c.key();
-    while *k < old.len() && old[*k].key() < key {
-        *k += 1;
-    }
-    if let Some(o) = old.get(*k) {
-        if o.key() == key {
-            c.shear = o.shear;
-            c.fn_prev = o.fn_prev;
-            c.rel_prev = o.rel_prev;
-            // Read only between multi-contact updates (every pass sets it anew).
-            c.dr = o.dr;
-        }
-    }
-    out.push(c);
-}
-
 // Cold: keeps the error formatting out of the contact loops.
 #[cold]
 #[inline(never)]
@@ -2566,33 +2529,37 @@ mod tests {
     use super::*;
 
     /// The wall contacts a scan of every particle against every wall element finds (what the
-    /// candidate list must reproduce), as keys in scan order.
+    /// candidate list must reproduce), as keys in scan order, from the same last-step contacts.
     fn scanned_keys(w: &World) -> Vec<(u32, u32, u32, u32)> {
-        let mut keys = Vec::new();
-        for i in 0..w.p.len() {
-            let (x, reach) = (w.p.x[i], w.p.radius[i] * w.mc_range);
+        let mut all = Vec::new();
+        for i in 0..w.p.len() as u32 {
             for (wi, wall) in w.walls.iter().enumerate() {
+                let cand = |mesh: usize, tri: usize| WallCandidate {
+                    p: i,
+                    wall: wi as u32,
+                    mesh: mesh as u32,
+                    tri: tri as u32,
+                };
                 match &wall.geom {
-                    WallGeom::Plane(pl) => {
-                        if (x[pl.axis] - pl.pos).abs() < reach {
-                            keys.push((i as u32, wi as u32, 0, 0));
-                        }
-                    }
+                    WallGeom::Plane(_) => all.push(cand(0, 0)),
                     WallGeom::Meshes(list) => {
                         for &mi in list {
-                            for (t, tri) in w.meshes[mi].tris.iter().enumerate() {
-                                if mesh::closest_point(tri, &x)
-                                    .is_some_and(|q| (x - q).norm_squared() < reach * reach)
-                                {
-                                    keys.push((i as u32, wi as u32, mi as u32, t as u32));
-                                }
-                            }
+                            all.extend((0..w.meshes[mi].tris.len()).map(|t| cand(mi, t)));
                         }
                     }
                 }
             }
         }
-        keys
+        let scene = wall_contacts::Scene {
+            walls: &w.walls,
+            meshes: &w.meshes,
+            x: &w.p.x,
+            radius: &w.p.radius,
+            reach_factor: w.mc_range,
+        };
+        let (mut out, mut scratch) = (Vec::new(), Vec::new());
+        wall_contacts::collect(&scene, &all, &w.wc_old, &mut out, &mut scratch);
+        out.iter().map(WallContact::key).collect()
     }
 
     /// A piston of two tilted triangles oscillating onto two layers of resting spheres (no
