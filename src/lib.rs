@@ -16,6 +16,7 @@ pub mod liggghts;
 pub mod nonlocal;
 pub mod outputs;
 pub mod physics;
+pub mod rng;
 pub mod study;
 pub mod team;
 pub mod validate;

@@ -8,8 +8,10 @@ use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
 
-const EXAMPLE_DATA: &str =
-    "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact/data/input.data";
+/// The project's own 514-sphere packing (the Debian example's needs liggghts-doc).
+fn packing() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("validation/cases/uniaxial/packing_514.data")
+}
 
 fn decks() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs")
@@ -28,6 +30,7 @@ fn piston_force(dir: &Path, options: &[&str]) -> (Vec<f64>, String) {
         ("every", "10".into()),
         ("out", out.display().to_string()),
         ("dir", decks().display().to_string()),
+        ("data", packing().display().to_string()),
     ] {
         cmd.arg("-var").arg(k).arg(v);
     }
@@ -41,15 +44,6 @@ fn piston_force(dir: &Path, options: &[&str]) -> (Vec<f64>, String) {
     (force, String::from_utf8(run.get_output().stdout.clone()).unwrap())
 }
 
-/// The hydrogel deck reads the liggghts-doc example's data; without it the piston tests skip.
-fn have_example() -> bool {
-    let have = Path::new(EXAMPLE_DATA).exists();
-    if !have {
-        eprintln!("skipped: needs the liggghts-doc example data");
-    }
-    have
-}
-
 /// Largest difference from `exact` over its range.
 fn worst(f: &[f64], exact: &[f64]) -> f64 {
     let range =
@@ -61,9 +55,6 @@ fn worst(f: &[f64], exact: &[f64]) -> f64 {
 
 #[test]
 fn geometry_tolerance_bounds_the_piston_force_error() {
-    if !have_example() {
-        return;
-    }
     let tmp = tempfile::tempdir().unwrap();
     let (exact, _) = piston_force(tmp.path(), &["--mc-geometry-tolerance", "0"]);
     let worst = |tol: &str| worst(&piston_force(tmp.path(), &["--mc-geometry-tolerance", tol]).0, &exact);
@@ -78,9 +69,6 @@ fn geometry_tolerance_bounds_the_piston_force_error() {
 
 #[test]
 fn update_interval_bounds_the_piston_force_error() {
-    if !have_example() {
-        return;
-    }
     let tmp = tempfile::tempdir().unwrap();
     let (exact, _) = piston_force(tmp.path(), &[]);
     // K = 1 is the exact pass, bit for bit.
@@ -113,9 +101,6 @@ fn update_interval_bounds_the_piston_force_error() {
 
 #[test]
 fn a_neighbour_build_always_updates() {
-    if !have_example() {
-        return;
-    }
     // An interval longer than the run: the only full passes are those a neighbour build forces (a
     // build renumbers the pairs, so the kept radius changes would land on the wrong pairs).
     let tmp = tempfile::tempdir().unwrap();

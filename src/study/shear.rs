@@ -199,19 +199,7 @@ fn null_is_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> 
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
-struct Rng(u64);
-
-impl Rng {
-    /// Uniform in [0, 1) (splitmix64).
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e3779b97f4a7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use crate::rng::SplitMix64 as Rng;
 
 /// Random sequential addition of n non-overlapping spheres of diameter d in a periodic cube of
 /// side l (cell grid of side ≥ d).
@@ -227,7 +215,7 @@ fn random_positions(n: usize, l: f64, d: f64, rng: &mut Rng) -> Result<Vec<Vec3>
         if tries > 2000 * n + 10_000 {
             return Err(format!("random placement of {n} spheres in a box of side {l:e} m failed"));
         }
-        let x = Vec3::new(rng.next() * l, rng.next() * l, rng.next() * l);
+        let x = Vec3::new(rng.uniform() * l, rng.uniform() * l, rng.uniform() * l);
         let c = [0, 1, 2].map(|a| ((x[a] / cell) as usize).min(m - 1));
         let mut ok = true;
         'scan: for dz in -1i64..=1 {
@@ -286,7 +274,7 @@ fn prepare_sorted(spec: &RunSpec, compress_steps: u64, sort: bool) -> Result<(Wo
     // Small zero-mean random velocities (half the shear velocity across one diameter).
     let v0 = 0.5 * gdot * d;
     let mut vs_: Vec<Vec3> = (0..spec.n)
-        .map(|_| Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5) * (2.0 * v0))
+        .map(|_| Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * (2.0 * v0))
         .collect();
     let mean = vs_.iter().sum::<Vec3>() / spec.n as f64;
     vs_.iter_mut().for_each(|v| *v -= mean);

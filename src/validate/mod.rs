@@ -9,6 +9,7 @@
 pub mod calibrate;
 pub mod die;
 pub mod hard_cases;
+pub mod packing;
 pub mod physics;
 pub mod plot;
 pub mod runner;
@@ -54,6 +55,10 @@ pub struct CaseResult {
     /// Every check of the case held (correctness: analytic limits, cross-engine agreement, the
     /// reference table). A failed check makes `mcdem validate` exit non-zero.
     pub passed: bool,
+    /// Why the case did not run (an input it needs is missing): reported as skipped, never as
+    /// passed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skipped: Option<String>,
     /// Agreement targets with the paper's claims: reported met or not, never tuned to pass; a
     /// missed target is a finding, not a failure of the code.
     #[serde(default)]
@@ -65,6 +70,17 @@ pub struct CaseResult {
     #[serde(skip)]
     pub markdown: String,
     pub wall_time_s: f64,
+}
+
+impl CaseResult {
+    /// `passed`, `FAILED` or `skipped: <reason>`, as the console and the report print it.
+    pub fn status(&self) -> String {
+        match &self.skipped {
+            Some(why) => format!("skipped: {why}"),
+            None if self.passed => "passed".into(),
+            None => "FAILED".into(),
+        }
+    }
 }
 
 /// One stated target: the measured value against its limit.
@@ -162,12 +178,7 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
         });
         r.wall_time_s = t.elapsed().as_secs_f64();
         write_csv(&opts.out.join(format!("{}.csv", case.name)), &r.rows)?;
-        eprintln!(
-            "validate: {} {} in {:.1} s",
-            case.name,
-            if r.passed { "passed" } else { "FAILED" },
-            r.wall_time_s
-        );
+        eprintln!("validate: {} {} in {:.1} s", case.name, r.status(), r.wall_time_s);
         results.push(r);
     }
     let total = start.elapsed().as_secs_f64();
@@ -189,7 +200,7 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
             md,
             "| {} | {} | {}/{} | {:.2} |",
             r.name,
-            if r.passed { "pass" } else { "FAIL" },
+            r.status(),
             r.targets.iter().filter(|t| t.met).count(),
             r.targets.len(),
             r.wall_time_s
