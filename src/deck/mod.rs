@@ -1816,6 +1816,7 @@ impl Deck {
         let updates0 = self.world.mc_influence_updates();
         let passes0 = self.world.mc_updates;
         let threaded0 = self.world.threaded_passes();
+        let kernel0 = (self.world.mc_kernel_contacts, self.world.mc_kernel_fallbacks);
         while self.world.step < end {
             self.world.step().map_err(|e| {
                 let m = e.to_string();
@@ -1881,6 +1882,15 @@ impl Deck {
             "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {threads} threads{used}, {} neighbour builds{approx})\n",
             self.world.builds - builds0
         ));
+        // Whether the Eq. 3 cap acted: contacts the multi-contact kernel evaluated, and how many of
+        // them it switched back to Hertz because a penetration ratio exceeded MPR.
+        let contacts = self.world.mc_kernel_contacts - kernel0.0;
+        if contacts > 0 {
+            let capped = self.world.mc_kernel_fallbacks - kernel0.1;
+            self.say(&format!(
+                "Multi-contact kernel: {contacts} contact evaluations, {capped} capped to Hertz by the maximum penetration ratio\n"
+            ));
+        }
         Ok(())
     }
 }
