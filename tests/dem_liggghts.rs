@@ -276,8 +276,9 @@ fn nrmse_per_stroke(ours: &Path, theirs: &Path, stroke_steps: u64) -> Vec<f64> {
 }
 
 /// The hydrogel example with strokes of `ts` steps instead of 30000 (same piston travel), cut
-/// after `strokes` strokes.
-fn hydrogel(deck: &str, ts: u64, out: &str, strokes: usize) {
+/// after `strokes` strokes; the piston force's NRMSE against LIGGGHTS must stay within `tol` in
+/// every stroke.
+fn hydrogel(deck: &str, ts: u64, out: &str, strokes: usize, tol: f64) {
     let dir = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(Path::new(HYDROGEL).join(deck)).unwrap();
     let text = text.replace("variable ts_move   equal 30000", &format!("variable ts_move   equal {ts}"));
@@ -304,7 +305,7 @@ fn hydrogel(deck: &str, ts: u64, out: &str, strokes: usize) {
     println!("{deck} ({ts} steps per stroke): NRMSE per stroke {e:?}");
     assert_eq!(e.len(), strokes);
     for (k, v) in e.iter().enumerate() {
-        assert!(*v <= 0.03, "stroke {}: NRMSE {v} > 3 %", k + 1);
+        assert!(*v <= tol, "stroke {}: NRMSE {v:e} > {tol:e}", k + 1);
     }
 }
 
@@ -313,7 +314,9 @@ fn hydrogel_default_short_strokes_piston_force_nrmse() {
     if !have_hydrogel() {
         return;
     }
-    hydrogel("in.hydrogel_default", 3000, "piston_force_default.txt", 4);
+    // Measured per stroke: 1.7e-6, 2.4e-6, 1.9e-5, 9.0e-5 (round-off of two summation orders grows
+    // as the packing rearranges); a lost or doubled mesh contact moves it by 1e-2.
+    hydrogel("in.hydrogel_default", 3000, "piston_force_default.txt", 4, 1e-3);
 }
 
 /// Standard multi-contact, two fast strokes (about a minute of LIGGGHTS time: its multi-contact
@@ -323,7 +326,9 @@ fn hydrogel_multicontact_short_strokes_piston_force_nrmse() {
     if !have_hydrogel() {
         return;
     }
-    hydrogel("in.hydrogel_multicontact", 3000, "piston_force_multicontact.txt", 2);
+    // Measured 3.8e-3 and 9.1e-3: LIGGGHTS's standard MC drops its wall multi-contact data at
+    // each run boundary and keys it by triangle (docs/dem.md), which the engine does not copy.
+    hydrogel("in.hydrogel_multicontact", 3000, "piston_force_multicontact.txt", 2, 0.02);
 }
 
 #[test]
@@ -332,7 +337,7 @@ fn hydrogel_default_full_piston_force_nrmse() {
     if !have_hydrogel() {
         return;
     }
-    hydrogel("in.hydrogel_default", 30000, "piston_force_default.txt", 4);
+    hydrogel("in.hydrogel_default", 30000, "piston_force_default.txt", 4, 1e-3);
 }
 
 #[test]
@@ -341,5 +346,5 @@ fn hydrogel_multicontact_full_piston_force_nrmse() {
     if !have_hydrogel() {
         return;
     }
-    hydrogel("in.hydrogel_multicontact", 30000, "piston_force_multicontact.txt", 4);
+    hydrogel("in.hydrogel_multicontact", 30000, "piston_force_multicontact.txt", 4, 0.03);
 }

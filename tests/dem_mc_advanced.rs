@@ -108,7 +108,10 @@ fn capped_law_lies_between_the_limits_with_the_cap_tripped() {
         for (k, ((a, h), m)) in adv.iter().zip(&hertz).zip(&mc).enumerate() {
             let (a, h, m) = (a[col], h[col], m[col]);
             let (lo, hi) = if h < m { (h, m) } else { (m, h) };
-            assert!(lo - switching <= a && a <= hi + switching, "column {col} row {k}: {a} outside [{lo}, {hi}]");
+            assert!(
+                lo - switching <= a && a <= hi + switching,
+                "column {col} row {k}: {a} outside [{lo}, {hi}]"
+            );
             if (m - h).abs() <= digits {
                 continue;
             }
