@@ -228,17 +228,31 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
     Ok(results)
 }
 
-/// The speed-against-error picture: one point per case, model and setting that has both an NRMSE
-/// against its reference and a wall time, all measured in this run.
+/// The speed-against-error picture, one panel per case: every model run of the case that has an
+/// NRMSE against its reference and a wall time, all measured in this run, and the reference's own
+/// cost as a vertical line (what it costs to have the "exact" answer).
 fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, String> {
-    let mut series = Vec::new();
     let mut table = String::from(
         "\n## Speed against error\n\nEvery model run of this invocation that has an NRMSE against its reference \
-         (wall time includes setup; one point per model and setting).\n\n| case | model | NRMSE | wall time [s] | particle-steps/s |\n|---|---|---|---|---|\n",
+         (wall time includes setup; one point per model and setting), and the cost of each reference run.\n\n\
+         | case | model | NRMSE | wall time [s] | particle-steps/s |\n|---|---|---|---|---|\n",
     );
+    let mut panels: Vec<(String, Vec<plot::Series>)> = Vec::new();
     for r in results {
+        let mut series: Vec<plot::Series> = Vec::new();
+        let mut references: Vec<(String, f64)> = Vec::new();
         for m in &r.models {
-            let Some(e) = m.nrmse else { continue };
+            let Some(e) = m.nrmse else {
+                if m.model.starts_with("nonlocal") {
+                    references.push((m.model.clone(), m.wall_time_s));
+                    let _ = writeln!(
+                        table,
+                        "| {} | {} (reference) | - | {:.3} | - |",
+                        r.name, m.model, m.wall_time_s
+                    );
+                }
+                continue;
+            };
             let _ = writeln!(
                 table,
                 "| {} | {} | {:.3} % | {:.3} | {} |",
@@ -248,8 +262,7 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
                 m.wall_time_s,
                 m.particle_steps_per_s.map(|v| format!("{v:.3e}")).unwrap_or_else(|| "-".into())
             );
-            // One colour per engine and model family (cases and settings share it); the table
-            // above names every point.
+            // One colour per engine and model family within a panel; the table names every point.
             let engine = if m.model.starts_with("liggghts_") { "LIGGGHTS" } else { "Rust DEM" };
             let family = ["mc_advanced", "standard_mc", "hertz"]
                 .into_iter()
@@ -260,27 +273,51 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
                 if m.model.contains("_tol") || m.model.contains("_every") { ", approximate" } else { "" };
             let label = format!("{family}{approx} ({engine})");
             let point = (m.wall_time_s.max(1e-4), (100.0 * e).max(1e-4));
-            match series.iter_mut().find(|s: &&mut plot::Series| s.label == label) {
+            match series.iter_mut().find(|s| s.label == label) {
                 Some(s) => s.points.push(point),
                 None => series.push(plot::Series { label, points: vec![point], markers: true, thin: false }),
             }
         }
+        if series.is_empty() {
+            continue;
+        }
+        // The reference's cost: a vertical line over the panel's error range, one per reference
+        // run (e.g. one per Poisson ratio).
+        let ys = series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+        let (lo, hi) = ys.fold((f64::INFINITY, 0.0_f64), |(lo, hi), y| (lo.min(y), hi.max(y)));
+        for (name, t) in references {
+            let label = format!("reference cost: {}", name.split(' ').next().unwrap_or(&name));
+            let points = vec![(t.max(1e-4), lo / 1.2), (t.max(1e-4), hi * 1.2)];
+            match series.iter_mut().find(|s| s.label == label) {
+                // A second reference run of the same kind: its own vertical segment, drawn as a
+                // separate series with the same label would repeat the legend, so draw it thin.
+                Some(_) => {
+                    series.push(plot::Series { label: String::new(), points, markers: false, thin: true })
+                }
+                None => series.push(plot::Series { label, points, markers: false, thin: true }),
+            }
+        }
+        panels.push((r.name.to_string(), series));
     }
-    if series.is_empty() {
+    if panels.is_empty() {
         return Ok(String::new());
     }
-    let file = "speed_vs_error.png";
-    plot::draw(
-        &opts.out.join(file),
-        &plot::Chart {
-            title: "Speed against error (this run)",
+    let titles: Vec<String> =
+        panels.iter().map(|(c, _)| format!("{c}: speed against error (this run)")).collect();
+    let charts: Vec<plot::Chart> = panels
+        .into_iter()
+        .zip(&titles)
+        .map(|((_, series), title)| plot::Chart {
+            title,
             x_label: "wall time [s]",
             y_label: "NRMSE vs reference [%]",
             log_x: true,
             log_y: true,
             series,
-        },
-    )?;
-    let _ = writeln!(table, "\n![speed against error]({file})");
+        })
+        .collect();
+    let file = "speed_vs_error.png";
+    plot::draw_panels(&opts.out.join(file), &charts, 2)?;
+    let _ = writeln!(table, "\n![speed against error, one panel per case]({file})");
     Ok(table)
 }

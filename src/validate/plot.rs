@@ -78,12 +78,39 @@ fn err<E: std::fmt::Debug>(e: E) -> String {
 
 /// Draws `chart` into a 900×600 PNG at `path`.
 pub fn draw(path: &Path, chart: &Chart) -> Result<(), String> {
+    draw_panels(path, std::slice::from_ref(chart), 1)
+}
+
+/// Draws `charts` side by side into one PNG at `path`, `columns` panels per row, each 900×600.
+pub fn draw_panels(path: &Path, charts: &[Chart], columns: usize) -> Result<(), String> {
     register_font();
-    let (w, h) = (900u32, 600u32);
+    let columns = columns.clamp(1, charts.len().max(1));
+    let rows = charts.len().div_ceil(columns).max(1);
+    let (w, h) = (900 * columns as u32, 600 * rows as u32);
     let mut buf = vec![0u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
+        for (area, chart) in root.split_evenly((rows, columns)).iter().zip(charts) {
+            draw_on(area, chart)?;
+        }
+        root.present().map_err(err)?;
+    }
+    let file = std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header()
+        .and_then(|mut wr| wr.write_image_data(&buf))
+        .map_err(|e| format!("cannot encode {}: {e}", path.display()))
+}
+
+/// Draws one chart on a drawing area.
+fn draw_on<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    chart: &Chart,
+) -> Result<(), String> {
+    {
         let xs = range(chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)), chart.log_x);
         let ys = range(chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), chart.log_y);
         let mut builder = ChartBuilder::on(&root);
@@ -117,18 +144,24 @@ pub fn draw(path: &Path, chart: &Chart) -> Result<(), String> {
                                 && (!chart.log_y || p.1 > 0.0)
                         })
                         .collect();
+                    // A series without a label (e.g. a second segment of a labelled one) gets no
+                    // legend entry.
                     if s.markers {
-                        ctx.draw_series(pts.iter().map(|p| Circle::new(*p, 5, color.filled())))
-                            .map_err(err)?
-                            .label(s.label.clone())
-                            .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+                        let a = ctx
+                            .draw_series(pts.iter().map(|p| Circle::new(*p, 5, color.filled())))
+                            .map_err(err)?;
+                        if !s.label.is_empty() {
+                            a.label(s.label.clone())
+                                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+                        }
                     } else {
-                        ctx.draw_series(LineSeries::new(pts, color.stroke_width(width)))
-                            .map_err(err)?
-                            .label(s.label.clone())
-                            .legend(move |(x, y)| {
+                        let a =
+                            ctx.draw_series(LineSeries::new(pts, color.stroke_width(width))).map_err(err)?;
+                        if !s.label.is_empty() {
+                            a.label(s.label.clone()).legend(move |(x, y)| {
                                 PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                             });
+                        }
                     }
                 }
                 ctx.configure_series_labels()
@@ -153,13 +186,6 @@ pub fn draw(path: &Path, chart: &Chart) -> Result<(), String> {
                     .map_err(err)?)
             }
         }
-        root.present().map_err(err)?;
     }
-    let file = std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()
-        .and_then(|mut wr| wr.write_image_data(&buf))
-        .map_err(|e| format!("cannot encode {}: {e}", path.display()))
+    Ok(())
 }
