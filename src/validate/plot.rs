@@ -113,7 +113,7 @@ fn draw_on<DB: DrawingBackend>(
     {
         let xs = range(chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)), chart.log_x);
         let ys = range(chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), chart.log_y);
-        let mut builder = ChartBuilder::on(&root);
+        let mut builder = ChartBuilder::on(root);
         builder
             .caption(chart.title, ("sans-serif", 22))
             .margin(15)
