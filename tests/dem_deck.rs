@@ -288,3 +288,40 @@ fn threads_mode_is_checked_and_changes_no_result() {
     // Forced threads run every step's pair pass on them (the deck has ~2 000 pairs: two blocks).
     assert!(shares.iter().all(|&s| s == 100.0), "parallel mode left steps serial: {shares:?}");
 }
+
+/// A sphere flying out of a fixed box stops the run naming it and the box side (LAMMPS: "Lost
+/// atoms"), at the neighbour check that finds it; it never runs on with a particle outside.
+#[test]
+fn a_particle_leaving_a_fixed_box_stops_the_run() {
+    let (ok, out) = run_deck(&format!("{BASE}set atom 1 vx 50\nrun 1000\n"), &[]);
+    assert!(!ok, "{out}");
+    assert!(
+        out.contains("particle 1") && out.contains("left the box along x") && out.contains("lost particle"),
+        "{out}"
+    );
+}
+
+/// `run N upto` runs to step N (LAMMPS), not N more steps; a step already passed is an error.
+/// Measured through `compute ke` and thermo: a sphere at 1 m/s keeps ke = ½ m v² (no contacts).
+#[test]
+fn run_upto_and_compute_ke() {
+    let deck = format!(
+        "{BASE}set atom 1 vx 1\ncompute k all ke\nthermo_style custom step c_k\nthermo 100\nrun 300\nrun 500 upto\n"
+    );
+    let (ok, out) = run_deck(&deck, &[]);
+    assert!(ok, "{out}");
+    let rows: Vec<(u64, f64)> = out
+        .lines()
+        .filter_map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            (w.len() == 2).then(|| Some((w[0].parse().ok()?, w[1].parse().ok()?))).flatten()
+        })
+        .collect();
+    let last = rows.last().unwrap();
+    assert_eq!(last.0, 500, "{out}");
+    // m = 4/3 π (1e-3)³ · 1000 kg/m³; ke = ½ m (1 m/s)².
+    let ke = 0.5 * 4.0 / 3.0 * std::f64::consts::PI * 1e-9 * 1000.0;
+    assert!(rows.iter().all(|r| (r.1 - ke).abs() <= 1e-6 * ke), "{rows:?} vs {ke}");
+    let (ok, out) = run_deck(&format!("{BASE}run 300\nrun 200 upto\n"), &[]);
+    assert!(!ok && out.contains("run upto: target step already passed"), "{out}");
+}

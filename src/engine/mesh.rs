@@ -531,6 +531,44 @@ mod tests {
         }
     }
 
+    /// A binary STL (80-byte header, count, 50 bytes per facet) reads as the same triangles as
+    /// the ASCII form, and a truncated one is refused with the facet count it announced.
+    #[test]
+    fn binary_stl_reads_like_ascii() {
+        let tris = [
+            [[1.0f32, 1.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            [[1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+        ];
+        let mut b = vec![0u8; 80];
+        b.extend(2u32.to_le_bytes());
+        for t in &tris {
+            b.extend([0.0f32, 0.0, -1.0].iter().flat_map(|c| c.to_le_bytes()));
+            b.extend(t.iter().flatten().flat_map(|c| c.to_le_bytes()));
+            b.extend([0u8, 0]);
+        }
+        let dir = std::env::temp_dir().join(format!("mcdem_stl_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (bin, text) = (dir.join("plate_bin.stl"), dir.join("plate_ascii.stl"));
+        std::fs::write(&bin, &b).unwrap();
+        let mut ascii = String::from("solid plate\n");
+        for t in &tris {
+            ascii += "facet normal 0 0 -1\nouter loop\n";
+            for v in t {
+                ascii += &format!("vertex {} {} {}\n", v[0], v[1], v[2]);
+            }
+            ascii += "endloop\nendfacet\n";
+        }
+        ascii += "endsolid plate\n";
+        std::fs::write(&text, ascii).unwrap();
+        let (a, t) = (read_stl(&bin).unwrap(), read_stl(&text).unwrap());
+        assert_eq!(a, t);
+        assert_eq!(a.len(), 2);
+        std::fs::write(&bin, &b[..b.len() - 10]).unwrap();
+        let e = read_stl(&bin).unwrap_err();
+        assert!(e.contains("announces 2 facets but is truncated"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn directions_follow_a_rotation() {
         let mut m = square();
