@@ -41,11 +41,13 @@ fn quick_bench_writes_rows_and_ratios() {
     // The nonlocal solver's row: the 514-particle compression to phi = 0.85.
     assert!(has("rust", "nonlocal_boussinesq", "nonlocal_514"), "nonlocal row");
     let ratios = v["ratios"].as_object().unwrap();
-    if std::path::Path::new(
-        "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact",
-    )
-    .exists()
-    {
+    if present(
+        std::path::Path::new(
+            "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact",
+        )
+        .exists(),
+        "the liggghts-doc hydrogel example",
+    ) {
         for model in ["hertz", "standard_mc", "mc_advanced"] {
             assert!(has("rust", model, "hydrogel_514"), "rust hydrogel {model}");
         }
@@ -61,11 +63,11 @@ fn quick_bench_writes_rows_and_ratios() {
             assert!(e.is_finite() && e > 0.0 && e < bound, "{key}: {e}");
             assert!(ratios.contains_key(&format!("rust 1 thread: mc_advanced {model} / hertz")));
         }
-        if std::process::Command::new("liggghts").arg("-h").output().is_ok() {
+        if present(std::process::Command::new("liggghts").arg("-h").output().is_ok(), "the liggghts binary") {
             assert!(has("liggghts", "hertz", "hydrogel_514"));
             assert!(ratios.contains_key("hertz: rust 1 thread / liggghts"));
             // Both cores as MPI ranks too, side by side with the Rust engine's two threads.
-            if std::process::Command::new("mpirun").arg("--version").output().is_ok() {
+            if present(std::process::Command::new("mpirun").arg("--version").output().is_ok(), "mpirun") {
                 let two = rows.iter().any(|r| {
                     r["engine"] == "liggghts"
                         && r["model"] == "hertz"
@@ -153,4 +155,15 @@ fn rounds_report_medians_ranges_and_targets() {
     let out = bench(&["--quick", "--scene", "kernel", "--rounds", "0", "--json"], &json);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--rounds must be at least 1"), "{err}");
+}
+
+/// A missing package fails the test unless the run says on purpose that this machine has none
+/// (MCDEM_NO_LIGGGHTS=1, README); tests/run.sh installs them all.
+fn present(ok: bool, what: &str) -> bool {
+    if !ok {
+        let skip = std::env::var("MCDEM_NO_LIGGGHTS").is_ok_and(|v| v == "1");
+        assert!(skip, "{what} is missing (tests/run.sh installs it; MCDEM_NO_LIGGGHTS=1 skips on purpose)");
+        eprintln!("MCDEM_NO_LIGGGHTS=1: {what} is missing, its rows are not checked");
+    }
+    ok
 }
