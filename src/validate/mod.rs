@@ -321,3 +321,19 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
     let _ = writeln!(table, "\n![speed against error, one panel per case]({file})");
     Ok(table)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::CaseResult;
+
+    /// A case that did not run reads "skipped: why", whatever its `passed` flag says.
+    #[test]
+    fn a_skipped_case_is_never_reported_as_passed() {
+        let mut r = CaseResult { passed: true, skipped: Some("needs X".into()), ..Default::default() };
+        assert_eq!(r.status(), "skipped: needs X");
+        r.skipped = None;
+        assert_eq!(r.status(), "passed");
+        r.passed = false;
+        assert_eq!(r.status(), "FAILED");
+    }
+}
