@@ -179,3 +179,74 @@ fn c_program_agrees_with_the_rust_core() {
     expect("batch_empty", mcdem::ffi::MCDEM_ERR_PARAMETER, "lanes used = 0");
     expect("batch_hand", mcdem::ffi::MCDEM_ERR_PARAMETER, "mcdem_pair_coeffs_new");
 }
+
+/// The error codes and messages of the C ABI, called from Rust through the same symbols: a
+/// non-finite input, coincident centres, an overlap beyond the radius, a null pointer; the
+/// message of the last failure, truncated to the caller's buffer with its full length returned;
+/// the influence-cache functions.
+#[test]
+fn c_abi_error_codes_and_messages() {
+    use mcdem::ffi::*;
+    use std::ffi::c_char;
+    let last = || {
+        let mut buf = [0 as c_char; 256];
+        let n = unsafe { mcdem_last_error(buf.as_mut_ptr(), buf.len()) };
+        let s = unsafe { std::ffi::CStr::from_ptr(buf.as_ptr()) }.to_string_lossy().into_owned();
+        (n, s)
+    };
+    let mut c =
+        mcdem_pair_coeffs { e_star: 0.0, g_star: 0.0, beta: 0.0, friction: 0.0, damping_ratio_t_n: 0.0 };
+    assert_eq!(unsafe { mcdem_pair_coeffs_new(1e6, 0.4, 1e6, 0.4, 0.7, 0.5, &mut c) }, MCDEM_OK);
+    assert_eq!(unsafe { mcdem_pair_coeffs_new(-1e6, 0.4, 1e6, 0.4, 0.7, 0.5, &mut c) }, MCDEM_ERR_PARAMETER);
+    assert!(last().1.to_lowercase().contains("young"), "{}", last().1);
+    assert_eq!(unsafe { mcdem_pair_coeffs_new(1e6, 0.4, 1e6, 0.4, 0.7, 0.5, &mut c) }, MCDEM_OK);
+    let body =
+        |x: f64| mcdem_body { x: [x, 0.0, 0.0], v: [0.0; 3], omega: [0.0; 3], radius: 1e-3, mass: 4e-6 };
+    let (mut shear, mut out) = ([0.0; 3], mcdem_contact_force::default());
+    let call = |bi: &mcdem_body, bj: &mcdem_body, shear: &mut [f64; 3], out: &mut mcdem_contact_force| unsafe {
+        mcdem_particle_particle(&c, bi, bj, 0.0, 0.0, 1e-6, shear.as_mut_ptr(), out)
+    };
+    assert_eq!(call(&body(0.0), &body(1.9e-3), &mut shear, &mut out), MCDEM_OK);
+    assert_eq!(out.in_contact, 1);
+    assert!((out.overlap - 1e-4).abs() < 1e-12);
+    // Coincident centres: no normal.
+    assert_eq!(call(&body(0.0), &body(0.0), &mut shear, &mut out), MCDEM_ERR_COINCIDENT);
+    assert!(!last().1.is_empty());
+    // A NaN coordinate.
+    assert_eq!(call(&body(0.0), &body(f64::NAN), &mut shear, &mut out), MCDEM_ERR_NON_FINITE);
+    let (full, msg) = last();
+    assert!(msg.contains("finite") || msg.contains("NaN"), "{msg}");
+    // Truncation: a 5-byte buffer gets 4 bytes and the terminator; the return is the full length.
+    let mut small = [1 as c_char; 5];
+    let n = unsafe { mcdem_last_error(small.as_mut_ptr(), small.len()) };
+    assert_eq!(n, full);
+    assert_eq!(small[4], 0);
+    assert_eq!(unsafe { std::ffi::CStr::from_ptr(small.as_ptr()) }.to_bytes(), &msg.as_bytes()[..4]);
+    // Null output pointer.
+    let r = unsafe {
+        mcdem_particle_particle(
+            &c,
+            &body(0.0),
+            &body(1.9e-3),
+            0.0,
+            0.0,
+            1e-6,
+            shear.as_mut_ptr(),
+            std::ptr::null_mut(),
+        )
+    };
+    assert_eq!(r, MCDEM_ERR_NULL);
+    // Overlap at the radius.
+    assert_eq!(mcdem_check_overlap(0.5e-3, 1e-3), MCDEM_OK);
+    assert_eq!(mcdem_check_overlap(1e-3, 1e-3), MCDEM_ERR_OVERLAP);
+    assert!(last().1.contains("radius"), "{}", last().1);
+    // Influence cache: a negative or NaN tolerance is refused with a message, a valid one frees.
+    assert!(mcdem_influence_cache_new(-1.0).is_null());
+    assert!(!last().1.is_empty());
+    assert!(mcdem_influence_cache_new(f64::NAN).is_null());
+    let cache = mcdem_influence_cache_new(1e-3);
+    assert!(!cache.is_null());
+    assert_eq!(unsafe { mcdem_influence_cache_recomputed(cache) }, 0);
+    unsafe { mcdem_influence_cache_free(cache) };
+    unsafe { mcdem_influence_cache_free(std::ptr::null_mut()) };
+}
