@@ -242,7 +242,7 @@ fn uniaxial_command_runs_one_load_step() {
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
-    let last = text.lines().filter(|l| !l.starts_with('#')).last().unwrap();
+    let last = text.lines().rfind(|l| !l.starts_with('#')).unwrap();
     let v: Vec<f64> = last.split(',').map(|x| x.parse().unwrap()).collect();
     assert_eq!(v[0], 1.0, "{last}");
     assert!((v[1] - 0.165).abs() < 1e-12 && v[3] > 0.0 && v[3].is_finite(), "{last}");
