@@ -12,6 +12,7 @@ pub mod hard_cases;
 pub mod packing;
 pub mod physics;
 pub mod plot;
+pub mod progress;
 pub mod runner;
 pub mod uniaxial;
 
@@ -164,6 +165,10 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
     for case in all.iter().filter(|c| only.is_empty() || only.iter().any(|n| n == c.name)) {
         eprintln!("validate: running {}", case.name);
         let t = Instant::now();
+        let ticker = progress::Ticker::start(
+            case.name,
+            progress::previous_wall_time(&opts.out, case.name, opts.quick),
+        );
         // A case that cannot run (missing input, unstable model) is reported as failed with its
         // message; the other cases still run.
         let mut r = (case.run)(opts).unwrap_or_else(|e| {
@@ -176,6 +181,7 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
                 ..Default::default()
             }
         });
+        drop(ticker);
         r.wall_time_s = t.elapsed().as_secs_f64();
         write_csv(&opts.out.join(format!("{}.csv", case.name)), &r.rows)?;
         eprintln!("validate: {} {} in {:.1} s", case.name, r.status(), r.wall_time_s);
