@@ -255,6 +255,9 @@ pub fn step<const D: usize>(
     let mut du_max: f64 = 0.0;
     let mut energy1 = 0.0;
     let mut first = true;
+    // A node within round-off of its wall bound is on it (displacements are O(h), their
+    // round-off O(1e-16 h)).
+    let tol = 1e-10 * grid.h;
     ws.pk1.resize(np, Mat::<D>::zeros());
     ws.tangent.resize(np, super::constitutive::zero_tangent::<D>());
     // Active-set strategy: Newton on the equality-constrained problem (bound dofs held at their
@@ -263,6 +266,19 @@ pub fn step<const D: usize>(
     // until the set no longer changes.
     for iter in 1..=opt.newton.max_iter {
         evaluate(pts, &body.law, ws, dt, step, iter)?;
+        // Projected Newton (Bertsekas): a free node resting on its wall (within round-off) that
+        // the residual pushes into the wall is bound for the solve; otherwise the projection of
+        // the line-search path would drop part of the increment and what remains need not descend.
+        for k in 0..ndof {
+            if ws.state[k] == DofState::Free {
+                let (lo, hi) = (ws.lo[k], ws.hi[k]);
+                let (at_lo, at_hi) = (ws.u[k] <= lo.0 + tol, ws.u[k] >= hi.0 - tol);
+                if (at_lo && ws.res[k] < 0.0) || (at_hi && ws.res[k] > 0.0) {
+                    ws.u[k] = if at_lo { lo.0 } else { hi.0 };
+                    ws.state[k] = DofState::Wall(if at_lo { lo.1 } else { hi.1 });
+                }
+            }
+        }
         assemble_and_solve(pts, ws, dt, step)?;
         // Globalisation: the backward-Euler step (Eqs. 10–12) is the minimiser of the incremental
         // potential Π(u) = |u − Δt v|²_M /(2Δt²) + Σ_p V_p⁰ W(F_p(u)) − f_ext·u, whose gradient is
