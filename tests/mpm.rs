@@ -374,3 +374,46 @@ fn free_body_conserves_momentum_and_loses_energy_at_first_order() {
     eprintln!("energy loss over 40 µs: {loss1:.4e} (Δt = 2 µs), {loss2:.4e} (Δt = 1 µs), ratio {ratio:.3}");
     assert!(loss2 > 0.0 && (1.6..2.4).contains(&ratio), "loss ratio {ratio} not first order");
 }
+
+/// Bad scenes stop with a message naming the cause.
+#[test]
+fn bad_scenes_name_their_problem() {
+    use mcdem::mpm::scene::Scene;
+    let scene = |material: &str, walls: &str| {
+        format!(
+            r#"{{"dimension": 2, "material": {material},
+                "body": {{"shape": "disc", "center": [0.0, 0.01], "radius": 0.01}},
+                "grid": {{"h": 1e-3, "points_per_cell": 2}}, "walls": [{walls}], "dt": 1e-4, "steps": 1}}"#
+        )
+    };
+    let good = r#"{"law": "neohookean", "lambda": 3e6, "mu": 1.5e6, "density": 990}"#;
+    let err = |text: String| Scene::from_json(&text).and_then(|s| s.setup::<2>().map(|_| ())).unwrap_err();
+    let e = err(scene(r#"{"law": "neohookean", "lambda": 3e6, "mu": -1.5e6, "density": 990}"#, ""));
+    assert!(e.contains("μ must be positive"), "{e}");
+    let e = err(scene(r#"{"law": "rubber", "lambda": 3e6, "mu": 1.5e6, "density": 990}"#, ""));
+    assert!(e.contains("unknown law"), "{e}");
+    // A wall through the disc: points start on its wrong side.
+    let e = err(scene(good, r#"{"axis": 1, "side": 1, "position": 0.005}"#));
+    assert!(e.contains("wrong side") && e.contains("wall 0"), "{e}");
+    let e = err(scene(good, r#"{"axis": 2, "side": 1, "position": 0.0}"#));
+    assert!(e.contains("axis"), "{e}");
+    assert!(Scene::from_json(&scene(good, r#"{"axis": 1, "side": 1, "position": 0.0}"#))
+        .unwrap()
+        .setup::<2>()
+        .is_ok());
+    // A point outside the grid is reported with its step.
+    let mut setup = Scene::from_json(&scene(good, "")).unwrap().setup::<2>().unwrap();
+    setup.body.points.x[0][0] = 1.0;
+    let e = step(&mut setup.body, &[], &[], &setup.options, 7, &mut Workspace::default()).unwrap_err();
+    assert!(e.contains("step 7") && e.contains("outside the grid"), "{e}");
+    // Newton capped at one iteration cannot meet Eq. 16 on a loaded step: the criteria are named.
+    let mut setup =
+        Scene::from_json(&scene(good, r#"{"axis": 1, "side": -1, "position": 0.02, "velocity": -0.5}"#))
+            .unwrap()
+            .setup::<2>()
+            .unwrap();
+    setup.options.newton.max_iter = 1;
+    let e =
+        step(&mut setup.body, &setup.walls, &[], &setup.options, 3, &mut Workspace::default()).unwrap_err();
+    assert!(e.contains("step 3") && e.contains("C1") && e.contains("Eq. 16"), "{e}");
+}

@@ -68,8 +68,16 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
     let mut ws = Workspace::default();
     let started = Instant::now();
     let mut total_iters = 0;
+    let mut failure = None;
     for k in 0..scene.steps {
-        let rep = step(&mut setup.body, &setup.walls, &[], &setup.options, k, &mut ws)?;
+        let rep = match step(&mut setup.body, &setup.walls, &[], &setup.options, k, &mut ws) {
+            Ok(r) => r,
+            Err(e) => {
+                // Keep what was computed: the history up to the failed step is written first.
+                failure = Some(e);
+                break;
+            }
+        };
         total_iters += rep.iterations;
         for w in setup.walls.iter_mut() {
             w.position += w.velocity * setup.options.dt;
@@ -168,6 +176,9 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
                 series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
             },
         )?;
+    }
+    if let Some(e) = failure {
+        return Err(format!("{e} (history up to the previous step written to {})", out.display()));
     }
     eprintln!(
         "mpm: {} steps, {} points, {} Newton iterations, {wall:.2} s wall time; outputs in {}",

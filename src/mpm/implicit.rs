@@ -287,7 +287,9 @@ pub fn step<const D: usize>(
         let slope: f64 =
             (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.du[k] * ws.res[k]).sum();
         let (pi0, pi_scale) =
-            potential(pts, &body.law, ws, dt, false).expect("the current iterate has J > 0");
+            potential(pts, &body.law, ws, dt, false).ok_or_else(|| {
+            format!("step {step}, Newton iteration {iter}: a material point is inverted (J ≤ 0) after the wall projection; reduce Δt or refine the grid")
+        })?;
         let mut alpha = 1.0;
         loop {
             ws.trial.clear();

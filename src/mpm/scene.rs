@@ -103,6 +103,9 @@ pub struct NewtonSpec {
     pub max_iter: usize,
 }
 
+/// Membership test of the body's shape.
+type Inside<const D: usize> = Box<dyn Fn(&Vector<D>) -> bool>;
+
 /// Everything a run needs, built from a validated scene.
 pub struct Setup<const D: usize> {
     pub body: Body<D>,
@@ -157,7 +160,7 @@ impl Scene {
             }
             Ok(Vector::<D>::from_fn(|d, _| v[d]))
         };
-        let (lo, hi, inside): (Vector<D>, Vector<D>, Box<dyn Fn(&Vector<D>) -> bool>) = match &self.body {
+        let (lo, hi, inside): (Vector<D>, Vector<D>, Inside<D>) = match &self.body {
             BodySpec::Disc { center, radius } => {
                 let c = vec(center, "center")?;
                 if !(radius.is_finite() && *radius > 0.0) {
