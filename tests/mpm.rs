@@ -336,7 +336,7 @@ fn free_body_conserves_momentum_and_loses_energy_at_first_order() {
                 x.norm() < r
             });
         for (x, v) in points.x.iter().zip(points.v.iter_mut()) {
-            // 1 m/s translation, 200 rad/s spin, 0.05 /µs... stretching rate 100 /s.
+            // 1 m/s translation, 200 rad/s spin, stretching rate 100 /s.
             *v = Vector::<2>::new(1.0 - 200.0 * x[1] + 100.0 * x[0], 0.5 + 200.0 * x[0] - 100.0 * x[1]);
         }
         let mut body = Body { grid, points, law };
