@@ -13,6 +13,7 @@ pub mod engine;
 pub mod ffi;
 #[cfg(feature = "liggghts")]
 pub mod liggghts;
+pub mod mpm;
 pub mod nonlocal;
 pub mod outputs;
 pub mod physics;

@@ -124,6 +124,14 @@ enum Command {
         #[command(subcommand)]
         study: Study,
     },
+    /// Implicit finite-strain MPM of one soft particle between walls (JSON scene, see docs/mpm.md)
+    Mpm {
+        /// Scene file (JSON)
+        scene: PathBuf,
+        /// Output directory (history.csv, points.csv, PNG charts)
+        #[arg(long, default_value = "mpm_out")]
+        out: PathBuf,
+    },
     /// Run the validation suite and write the report
     /// Make a packing of the project's own: `hydrogel` is the 514-sphere packing of the uniaxial
     /// case (validation/cases/uniaxial/README.md); `--describe FILE` prints the statistics of a
@@ -528,6 +536,7 @@ fn main() -> ExitCode {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)
         }
         Command::Study { study: s } => study(s),
+        Command::Mpm { scene, out } => mcdem::mpm::cli::run(&scene, &out),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

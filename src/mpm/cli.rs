@@ -1,0 +1,191 @@
+//! `mcdem mpm SCENE [--out DIR]`: runs a scene and writes `history.csv`, `points.csv` (final
+//! material points) and PNG charts into DIR.
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use super::constitutive::{inverse, Constitutive, Law, Mat};
+use super::implicit::{step, Workspace};
+use super::points::Points;
+use super::scene::Scene;
+use crate::validate::plot::{draw, Chart, Series};
+
+/// Plane-strain effective modulus E* = E/(1 − ν²) = 4μ(λ + μ)/(λ + 2μ) of Eq. 19.
+pub fn plane_strain_modulus(lambda: f64, mu: f64) -> f64 {
+    4.0 * mu * (lambda + mu) / (lambda + 2.0 * mu)
+}
+
+/// Hertz line contact of a cylinder between plates, Nezamabadi et al. 2019, Eq. 19:
+/// F = (π/4) E* d, d the displacement of the centre (force per unit length).
+pub fn eq19_force(lambda: f64, mu: f64, d: f64) -> f64 {
+    std::f64::consts::FRAC_PI_4 * plane_strain_modulus(lambda, mu) * d
+}
+
+/// Volume averages (weights V⁰) over the points of the Green–Lagrange strain γ = (FᵀF − I)/2 and of
+/// the second Piola–Kirchhoff stress S = F⁻¹P, component (a, a) with a the last axis.
+pub fn mean_strain_stress<const D: usize>(points: &Points<D>, law: &Law) -> (f64, f64) {
+    let a = D - 1;
+    let (mut g, mut s, mut v) = (0.0, 0.0, 0.0);
+    for (f, v0) in points.f.iter().zip(&points.vol0) {
+        let gamma: Mat<D> = (f.transpose() * f - Mat::<D>::identity()) * 0.5;
+        let pk1 = <Law as Constitutive<D>>::pk1(law, f).unwrap_or_else(|_| Mat::<D>::zeros());
+        let pk2 = inverse(f) * pk1;
+        g += v0 * gamma[(a, a)];
+        s += v0 * pk2[(a, a)];
+        v += v0;
+    }
+    (g / v, s / v)
+}
+
+/// Runs the scene at `path`, writing into `out`.
+pub fn run(path: &Path, out: &Path) -> Result<(), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let scene = Scene::from_json(&text)?;
+    match scene.dimension {
+        2 => run_d::<2>(&scene, out),
+        3 => run_d::<3>(&scene, out),
+        d => Err(format!("scene: dimension must be 2 or 3, got {d}")),
+    }
+}
+
+fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
+    let mut setup = scene.setup::<D>()?;
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let (lambda, mu) = setup.body.law.lame();
+    let a = D - 1;
+    // Plate pair along the last axis (bottom side +1, top side −1), if the scene has one.
+    let bottom = setup.walls.iter().position(|w| w.axis == a && w.side > 0.0);
+    let top = setup.walls.iter().position(|w| w.axis == a && w.side < 0.0);
+    let gap0 = match (bottom, top) {
+        (Some(b), Some(t)) => Some(setup.walls[t].position - setup.walls[b].position),
+        _ => None,
+    };
+    let mut csv = String::from(
+        "step,time,d,F_top,F_bottom,F_mean,F_eq19,gamma_plates,gamma_mean,S_mean,newton_iterations\n",
+    );
+    let (mut fd, mut f19, mut sg) = (Vec::new(), Vec::new(), Vec::new());
+    let mut ws = Workspace::default();
+    let started = Instant::now();
+    let mut total_iters = 0;
+    let mut failure = None;
+    for k in 0..scene.steps {
+        let rep = match step(&mut setup.body, &setup.walls, &[], &setup.options, k, &mut ws) {
+            Ok(r) => r,
+            Err(e) => {
+                // Keep what was computed: the history up to the failed step is written first.
+                failure = Some(e);
+                break;
+            }
+        };
+        total_iters += rep.iterations;
+        for w in setup.walls.iter_mut() {
+            w.position += w.velocity * setup.options.dt;
+        }
+        if (k + 1) % scene.output_every != 0 && k + 1 != scene.steps {
+            continue;
+        }
+        let (gm, sm) = mean_strain_stress(&setup.body.points, &setup.body.law);
+        let (mut d, mut ft, mut fb, mut gp) = (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
+        if let (Some(b), Some(t), Some(g0)) = (bottom, top, gap0) {
+            let gap = setup.walls[t].position - setup.walls[b].position;
+            // Centre displacement: half the approach of the plates (Fig. 6, symmetric contacts).
+            d = 0.5 * (g0 - gap);
+            ft = rep.wall_load[t];
+            fb = rep.wall_load[b];
+            gp = 0.5 * ((gap / g0).powi(2) - 1.0);
+        }
+        let f19_k = if D == 2 { eq19_force(lambda, mu, d) } else { f64::NAN };
+        let t = (k + 1) as f64 * setup.options.dt;
+        let _ = writeln!(
+            csv,
+            "{},{t:.9e},{d:.9e},{ft:.9e},{fb:.9e},{:.9e},{f19_k:.9e},{gp:.9e},{gm:.9e},{sm:.9e},{}",
+            k + 1,
+            0.5 * (ft + fb),
+            rep.iterations
+        );
+        if d.is_finite() {
+            fd.push((d, 0.5 * (ft + fb)));
+            f19.push((d, f19_k));
+            sg.push((-gp, -sm));
+        }
+    }
+    let wall = started.elapsed().as_secs_f64();
+    std::fs::write(out.join("history.csv"), csv).map_err(|e| format!("cannot write history.csv: {e}"))?;
+    let mut pts = String::from("x,y,z,J,sigma_xx,sigma_yy,sigma_xy\n");
+    let b = &setup.body.points;
+    for p in 0..b.len() {
+        let x = b.x[p];
+        let z = if D == 3 { x[2] } else { 0.0 };
+        let s = b.sigma[p];
+        let _ = writeln!(
+            pts,
+            "{:.9e},{:.9e},{z:.9e},{:.9e},{:.9e},{:.9e},{:.9e}",
+            x[0],
+            x[1],
+            b.vol[p] / b.vol0[p],
+            s[(0, 0)],
+            s[(1, 1)],
+            s[(0, 1)]
+        );
+    }
+    std::fs::write(out.join("points.csv"), pts).map_err(|e| format!("cannot write points.csv: {e}"))?;
+    if !fd.is_empty() {
+        draw(
+            &out.join("force_displacement.png"),
+            &Chart {
+                title: "Plate force against centre displacement",
+                x_label: "d [m]",
+                y_label: "F [N/m]",
+                log_x: false,
+                log_y: false,
+                series: vec![
+                    Series {
+                        label: "MPM (mean of the plates)".into(),
+                        points: fd,
+                        markers: true,
+                        thin: false,
+                    },
+                    Series { label: "Eq. 19".into(), points: f19, markers: false, thin: false },
+                ],
+            },
+        )?;
+        let mut snap = Vec::new();
+        for x in &b.x {
+            snap.push((x[0], x[a]));
+        }
+        draw(
+            &out.join("stress_strain.png"),
+            &Chart {
+                title: "Mean −S_yy against plate −γ_yy",
+                x_label: "−γ_yy",
+                y_label: "−S_yy [Pa]",
+                log_x: false,
+                log_y: false,
+                series: vec![Series { label: "MPM".into(), points: sg, markers: true, thin: false }],
+            },
+        )?;
+        draw(
+            &out.join("points_final.png"),
+            &Chart {
+                title: "Material points at the end",
+                x_label: "x [m]",
+                y_label: "y [m]",
+                log_x: false,
+                log_y: false,
+                series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
+            },
+        )?;
+    }
+    if let Some(e) = failure {
+        return Err(format!("{e} (history up to the previous step written to {})", out.display()));
+    }
+    eprintln!(
+        "mpm: {} steps, {} points, {} Newton iterations, {wall:.2} s wall time; outputs in {}",
+        scene.steps,
+        b.len(),
+        total_iters,
+        out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,590 @@
+//! The implicit time step of the finite-strain MPM (Nezamabadi et al. 2019, Section 4 and App. A)
+//! for one body with rigid frictionless planar walls.
+//!
+//! Within a step the grid carries the configuration at time t: a trial nodal displacement u
+//! (Eq. 10: u = Δt v_node(t+Δt), u(t) = 0) moves each material point by the incremental gradient
+//! ΔF_p = I + Σ_I u_I ⊗ ∇N_I(x_p), so F_p(t+Δt) = ΔF_p F_p(t). The internal force is written on
+//! the initial configuration, f_int,I = −Σ_p V_p⁰ P(F_p) G_Ip with G_Ip = F_p(t)ᵀ ∇N_I(x_p); this
+//! equals Eq. 4's −Σ_p G_p σ_p V_p (Eq. 9: σ = P Fᵀ/J, V = J V⁰) and makes the consistent tangent
+//! the plain chain rule of ∂P/∂F (App. A, Eq. A.3):
+//! K = M/Δt² + Σ_p V_p⁰ G_Ip · A_p · G_Jp.
+//!
+//! Walls are Moreau's velocity-Signorini condition at grid nodes (Section 2.2, Fig. 2a) written on
+//! the step's displacement: a node may close an open gap d > 0 to the wall but not move further,
+//! and a node already past the wall plane (d ≤ 0, possible because the grid is reset every step
+//! and a node carries mass up to one cell away from the body) may not approach it further:
+//! s (u − Δt v_wall) ≥ −max(d, 0), with the reaction f ≥ 0 and complementarity. This is solved
+//! exactly by an active set inside the Newton loop; the reaction is −R at a bound dof.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::Mat as FMat;
+
+use super::constitutive::{det, Constitutive, Law, Mat, Tangent};
+use super::grid::{Grid, Stencil, Vector};
+use super::points::Points;
+
+/// One body: its proper grid, its material points and its law.
+#[derive(Clone, Debug)]
+pub struct Body<const D: usize> {
+    pub grid: Grid<D>,
+    pub points: Points<D>,
+    pub law: Law,
+}
+
+/// A rigid frictionless plane x_axis = position, the body on the side `side` (+1: above/right,
+/// −1: below/left), moving along its normal at `velocity`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wall {
+    pub axis: usize,
+    pub side: f64,
+    pub position: f64,
+    pub velocity: f64,
+}
+
+/// Newton parameters: the two criteria of Eq. 16 and an iteration cap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Newton {
+    /// ε₁ on C₁ = ‖Δu^k‖ / max_j ‖Δu^j‖.
+    pub eps1: f64,
+    /// ε₂ on C₂ = |Δu^k · R^k| / |Δu¹ · R¹|.
+    pub eps2: f64,
+    pub max_iter: usize,
+}
+
+impl Default for Newton {
+    fn default() -> Self {
+        // Newton converges quadratically: once C₁ < 1e-10 the next iterate is at round-off, so
+        // these are the values at which the solution is exact to the digits the tests ask for.
+        Self { eps1: 1e-10, eps2: 1e-20, max_iter: 40 }
+    }
+}
+
+/// How the points' velocities are updated from the grid: FLIP (`flip` = 1, the increment of the
+/// nodal velocity, conserves the particle kinetic energy best) blended with PIC (`flip` = 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepOptions {
+    pub dt: f64,
+    pub gravity: [f64; 3],
+    pub newton: Newton,
+    pub flip: f64,
+}
+
+/// What one step reports.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepReport {
+    pub iterations: usize,
+    /// Normal force of each wall on the body, positive when it pushes (N, or N/m in 2-D).
+    pub wall_load: Vec<f64>,
+    /// Final values of the criteria of Eq. 16.
+    pub c1: f64,
+    pub c2: f64,
+}
+
+/// A Dirichlet condition on one grid dof for this step: node, component, displacement over the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fixed {
+    pub node: usize,
+    pub comp: usize,
+    pub u: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum DofState {
+    Free,
+    /// At the bound of wall w.
+    Wall(usize),
+    Fixed(f64),
+}
+
+/// Buffers of a step, kept between steps so that the loops do not allocate.
+#[derive(Clone, Debug, Default)]
+pub struct Workspace<const D: usize> {
+    stencils: Vec<Stencil<D>>,
+    node_mass: Vec<f64>,
+    node_mom: Vec<Vector<D>>,
+    /// Grid node → active node (mass > 0) or usize::MAX.
+    dof_of: Vec<usize>,
+    active: Vec<usize>,
+    v_old: Vec<f64>,
+    u: Vec<f64>,
+    du: Vec<f64>,
+    trial: Vec<f64>,
+    res: Vec<f64>,
+    fext: Vec<f64>,
+    mass_dof: Vec<f64>,
+    lo: Vec<(f64, usize)>,
+    hi: Vec<(f64, usize)>,
+    state: Vec<DofState>,
+    trip: Vec<Triplet<usize, usize, f64>>,
+    pk1: Vec<Mat<D>>,
+    tangent: Vec<Tangent<D>>,
+}
+
+/// Advances the body by one implicit step of size `opt.dt` (Eqs. 10–16). `step` numbers the step in
+/// error messages. Walls are given at time t; the caller moves them afterwards.
+pub fn step<const D: usize>(
+    body: &mut Body<D>,
+    walls: &[Wall],
+    fixed: &[Fixed],
+    opt: &StepOptions,
+    step: usize,
+    ws: &mut Workspace<D>,
+) -> Result<StepReport, String> {
+    let dt = opt.dt;
+    let grid = &body.grid;
+    let pts = &mut body.points;
+    let np = pts.len();
+    let gravity = Vector::<D>::from_fn(|d, _| opt.gravity[d]);
+
+    // Shape functions of every point; a point outside the grid is an error of the scene or a body
+    // that travelled out of its grid.
+    ws.stencils.clear();
+    for (p, x) in pts.x.iter().enumerate() {
+        match grid.stencil(x) {
+            Some(s) => ws.stencils.push(s),
+            None => {
+                return Err(format!(
+                    "step {step}: material point {p} at {:?} is outside the grid [{:?}, {:?}]",
+                    x.as_slice(),
+                    grid.origin.as_slice(),
+                    grid.upper().as_slice()
+                ))
+            }
+        }
+    }
+
+    // Lumped mass and momentum, nodal velocity by Eq. 5.
+    let nn = grid.n_nodes();
+    ws.node_mass.clear();
+    ws.node_mass.resize(nn, 0.0);
+    ws.node_mom.clear();
+    ws.node_mom.resize(nn, Vector::<D>::zeros());
+    for (p, st) in ws.stencils.iter().enumerate() {
+        for c in 0..Stencil::<D>::LEN {
+            let w = st.n[c] * pts.mass[p];
+            ws.node_mass[st.nodes[c]] += w;
+            ws.node_mom[st.nodes[c]] += pts.v[p] * w;
+        }
+    }
+    ws.dof_of.clear();
+    ws.dof_of.resize(nn, usize::MAX);
+    ws.active.clear();
+    for i in 0..nn {
+        if ws.node_mass[i] > 0.0 {
+            ws.dof_of[i] = ws.active.len();
+            ws.active.push(i);
+        }
+    }
+    let na = ws.active.len();
+    let ndof = na * D;
+    let resize = |v: &mut Vec<f64>| {
+        v.clear();
+        v.resize(ndof, 0.0);
+    };
+    resize(&mut ws.v_old);
+    resize(&mut ws.u);
+    resize(&mut ws.du);
+    resize(&mut ws.res);
+    resize(&mut ws.fext);
+    resize(&mut ws.mass_dof);
+    for (a, &i) in ws.active.iter().enumerate() {
+        for d in 0..D {
+            ws.v_old[a * D + d] = ws.node_mom[i][d] / ws.node_mass[i];
+            ws.mass_dof[a * D + d] = ws.node_mass[i];
+        }
+    }
+    // Body force f_ext = Σ_p N_p m_p g (Eq. 4).
+    for (p, st) in ws.stencils.iter().enumerate() {
+        for c in 0..Stencil::<D>::LEN {
+            let a = ws.dof_of[st.nodes[c]];
+            for d in 0..D {
+                ws.fext[a * D + d] += st.n[c] * pts.mass[p] * gravity[d];
+            }
+        }
+    }
+
+    // Bounds of every dof from the walls (tightest one wins) and the Dirichlet conditions.
+    ws.lo.clear();
+    ws.lo.resize(ndof, (f64::NEG_INFINITY, usize::MAX));
+    ws.hi.clear();
+    ws.hi.resize(ndof, (f64::INFINITY, usize::MAX));
+    for (w, wall) in walls.iter().enumerate() {
+        for (a, &i) in ws.active.iter().enumerate() {
+            let gap = wall.side * (grid.node_position(i)[wall.axis] - wall.position);
+            let bound = wall.velocity * dt - wall.side * gap.max(0.0);
+            let k = a * D + wall.axis;
+            if wall.side > 0.0 && bound > ws.lo[k].0 {
+                ws.lo[k] = (bound, w);
+            } else if wall.side < 0.0 && bound < ws.hi[k].0 {
+                ws.hi[k] = (bound, w);
+            }
+        }
+    }
+    for k in 0..ndof {
+        if ws.lo[k].0 > ws.hi[k].0 {
+            let node = ws.active[k / D];
+            return Err(format!(
+                "step {step}: grid node {node} is pinched between walls {} and {} (the gap is thinner than one cell)",
+                ws.lo[k].1, ws.hi[k].1
+            ));
+        }
+    }
+    ws.state.clear();
+    ws.state.resize(ndof, DofState::Free);
+    for fx in fixed {
+        let a = ws.dof_of[fx.node];
+        if a != usize::MAX {
+            ws.state[a * D + fx.comp] = DofState::Fixed(fx.u);
+        }
+    }
+
+    // Predictor: the nodes keep their velocity, projected on the admissible set.
+    for k in 0..ndof {
+        ws.u[k] = dt * ws.v_old[k];
+        match ws.state[k] {
+            DofState::Fixed(v) => ws.u[k] = v,
+            _ => {
+                clamp(ws, k);
+            }
+        }
+    }
+
+    let mut report = StepReport { wall_load: vec![0.0; walls.len()], ..Default::default() };
+    let mut du_max: f64 = 0.0;
+    let mut energy1 = 0.0;
+    let mut first = true;
+    // A node within round-off of its wall bound is on it (displacements are O(h), their
+    // round-off O(1e-16 h)).
+    let tol = 1e-10 * grid.h;
+    ws.pk1.resize(np, Mat::<D>::zeros());
+    ws.tangent.resize(np, super::constitutive::zero_tangent::<D>());
+    // Active-set strategy: Newton on the equality-constrained problem (bound dofs held at their
+    // walls) to convergence, then the Signorini conditions are checked (a free node past its wall
+    // is put on it, a bound node whose wall would have to pull is released) and Newton resumes
+    // until the set no longer changes.
+    for iter in 1..=opt.newton.max_iter {
+        evaluate(pts, &body.law, ws, dt, step, iter)?;
+        // Projected Newton (Bertsekas): a free node resting on its wall (within round-off) that
+        // the residual pushes into the wall is bound for the solve; otherwise the projection of
+        // the line-search path would drop part of the increment and what remains need not descend.
+        for k in 0..ndof {
+            if ws.state[k] == DofState::Free {
+                let (lo, hi) = (ws.lo[k], ws.hi[k]);
+                let (at_lo, at_hi) = (ws.u[k] <= lo.0 + tol, ws.u[k] >= hi.0 - tol);
+                if (at_lo && ws.res[k] < 0.0) || (at_hi && ws.res[k] > 0.0) {
+                    ws.u[k] = if at_lo { lo.0 } else { hi.0 };
+                    ws.state[k] = DofState::Wall(if at_lo { lo.1 } else { hi.1 });
+                }
+            }
+        }
+        assemble_and_solve(pts, ws, dt, step)?;
+        // Globalisation: the backward-Euler step (Eqs. 10–12) is the minimiser of the incremental
+        // potential Π(u) = |u − Δt v|²_M /(2Δt²) + Σ_p V_p⁰ W(F_p(u)) − f_ext·u, whose gradient is
+        // −R. A full Newton increment of a large step can overshoot (or invert a point, where the
+        // laws are undefined): halve it until Π decreases (Armijo).
+        let slope: f64 =
+            (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.du[k] * ws.res[k]).sum();
+        let (pi0, pi_scale) =
+            potential(pts, &body.law, ws, dt, false).ok_or_else(|| {
+            format!("step {step}, Newton iteration {iter}: a material point is inverted (J ≤ 0) after the wall projection; reduce Δt or refine the grid")
+        })?;
+        let mut alpha = 1.0;
+        loop {
+            ws.trial.clear();
+            ws.trial.extend(ws.u.iter().zip(&ws.du).map(|(u, du)| u + alpha * du));
+            match potential(pts, &body.law, ws, dt, true) {
+                Some((pi, _)) if pi <= pi0 - 1e-4 * alpha * slope.abs() + 1e-12 * pi_scale => break,
+                _ => alpha *= 0.5,
+            }
+            if alpha < 1e-8 {
+                return Err(format!(
+                    "step {step}, Newton iteration {iter}: line search failed (no decrease of the incremental potential along the Newton increment); reduce Δt"
+                ));
+            }
+        }
+        ws.du.iter_mut().for_each(|d| *d *= alpha);
+        // Eq. 16 on the free dofs.
+        let mut norm = 0.0;
+        let mut energy = 0.0;
+        let mut rnorm = 0.0;
+        let mut fscale: f64 = 0.0;
+        for k in 0..ndof {
+            if ws.state[k] == DofState::Free {
+                norm += ws.du[k] * ws.du[k];
+                energy += ws.du[k] * ws.res[k];
+                rnorm += ws.res[k] * ws.res[k];
+            }
+            fscale = fscale.max(ws.mass_dof[k] * (ws.u[k] / (dt * dt)).abs()).max(ws.fext[k].abs());
+        }
+        fscale = fscale.max(internal_force_scale(pts, ws));
+        let norm = norm.sqrt();
+        du_max = du_max.max(norm);
+        if first {
+            energy1 = energy.abs();
+            first = false;
+        }
+        let c1 = if du_max > 0.0 { norm / du_max } else { 0.0 };
+        let c2 = if energy1 > 0.0 { energy.abs() / energy1 } else { 0.0 };
+        report.c1 = c1;
+        report.c2 = c2;
+        report.iterations = iter;
+        for k in 0..ndof {
+            ws.u[k] += ws.du[k];
+        }
+        // A residual at round-off of the forces makes both ratios meaningless (their references
+        // can vanish, e.g. a body at rest): that is convergence too.
+        let at_roundoff = rnorm.sqrt() <= 1e-13 * fscale * (ndof as f64).sqrt();
+        if std::env::var_os("MCDEM_MPM_TRACE").is_some() {
+            let nb = ws.state.iter().filter(|s| **s != DofState::Free).count();
+            eprintln!(
+                "  step {step} newton {iter}: C1 {c1:.3e} C2 {c2:.3e} |R| {:.3e} scale {fscale:.3e} alpha {alpha} bound {nb}",
+                rnorm.sqrt()
+            );
+        }
+        if !((c1 < opt.newton.eps1 && c2 < opt.newton.eps2) || at_roundoff) {
+            continue;
+        }
+        // Converged for this active set: check the Signorini conditions.
+        let mut changed = false;
+        for k in 0..ndof {
+            if ws.state[k] == DofState::Free && clamp(ws, k) {
+                changed = true;
+            }
+        }
+        evaluate(pts, &body.law, ws, dt, step, iter)?;
+        for k in 0..ndof {
+            if let DofState::Wall(w) = ws.state[k] {
+                // Reaction −R; released only when it pulls beyond the residual's round-off.
+                if walls[w].side * -ws.res[k] < -1e-12 * fscale {
+                    ws.state[k] = DofState::Free;
+                    changed = true;
+                }
+            }
+        }
+        if changed {
+            du_max = 0.0;
+            first = true;
+            continue;
+        }
+        for k in 0..ndof {
+            if let DofState::Wall(w) = ws.state[k] {
+                report.wall_load[w] += walls[w].side * -ws.res[k];
+            }
+        }
+        update_points(pts, &body.law, ws, dt, opt.flip, step)?;
+        return Ok(report);
+    }
+    Err(format!(
+        "step {step}: Newton did not converge in {} iterations: C1 = {:.3e} (ε1 = {:.1e}), C2 = {:.3e} (ε2 = {:.1e}) (Eq. 16)",
+        opt.newton.max_iter, report.c1, opt.newton.eps1, report.c2, opt.newton.eps2
+    ))
+}
+
+/// The incremental potential Π of the step (see `step`) at `ws.u` (or `ws.trial` when `trial`),
+/// with the sum of the magnitudes of its terms (the scale of its round-off); `None` when a point
+/// inverts there.
+fn potential<const D: usize>(
+    pts: &Points<D>,
+    law: &Law,
+    ws: &Workspace<D>,
+    dt: f64,
+    trial: bool,
+) -> Option<(f64, f64)> {
+    let u = if trial { &ws.trial } else { &ws.u };
+    let mut pi = 0.0;
+    let mut scale = 0.0;
+    for k in 0..u.len() {
+        let kin = 0.5 * ws.mass_dof[k] * (u[k] - dt * ws.v_old[k]).powi(2) / (dt * dt);
+        pi += kin - ws.fext[k] * u[k];
+        scale += kin + (ws.fext[k] * u[k]).abs();
+    }
+    for (p, st) in ws.stencils.iter().enumerate() {
+        let f = incremental_gradient(st, &ws.dof_of, u) * pts.f[p];
+        let w = pts.vol0[p] * law.energy(&f).ok()?;
+        pi += w;
+        scale += w.abs();
+    }
+    Some((pi, scale))
+}
+
+/// Projects dof k onto its wall bounds; true when it was on or past one (the bound becomes active).
+fn clamp<const D: usize>(ws: &mut Workspace<D>, k: usize) -> bool {
+    if ws.u[k] <= ws.lo[k].0 {
+        ws.u[k] = ws.lo[k].0;
+        ws.state[k] = DofState::Wall(ws.lo[k].1);
+        true
+    } else if ws.u[k] >= ws.hi[k].0 {
+        ws.u[k] = ws.hi[k].0;
+        ws.state[k] = DofState::Wall(ws.hi[k].1);
+        true
+    } else {
+        false
+    }
+}
+
+/// ΔF_p = I + Σ_I u_I ⊗ ∇N_I(x_p).
+fn incremental_gradient<const D: usize>(st: &Stencil<D>, dof_of: &[usize], u: &[f64]) -> Mat<D> {
+    let mut df = Mat::<D>::identity();
+    for c in 0..Stencil::<D>::LEN {
+        let a = dof_of[st.nodes[c]];
+        for i in 0..D {
+            for j in 0..D {
+                df[(i, j)] += u[a * D + i] * st.grad[c][j];
+            }
+        }
+    }
+    df
+}
+
+/// Stress and tangent at the trial displacement; residual R = f_ext + f_int − M a (Eq. A.4) with
+/// a from Eq. 12.
+fn evaluate<const D: usize>(
+    pts: &Points<D>,
+    law: &Law,
+    ws: &mut Workspace<D>,
+    dt: f64,
+    step: usize,
+    iter: usize,
+) -> Result<(), String> {
+    for k in 0..ws.res.len() {
+        let acc = ws.u[k] / (dt * dt) - ws.v_old[k] / dt;
+        ws.res[k] = ws.fext[k] - ws.mass_dof[k] * acc;
+    }
+    for (p, st) in ws.stencils.iter().enumerate() {
+        let f = incremental_gradient(st, &ws.dof_of, &ws.u) * pts.f[p];
+        let (pk1, a) = law.pk1_tangent(&f).map_err(|e| {
+            format!(
+                "step {step}, Newton iteration {iter}: material point {p} inverted (J = {:.3e}); reduce Δt or refine the grid",
+                e.det
+            )
+        })?;
+        ws.pk1[p] = pk1;
+        ws.tangent[p] = a;
+        for c in 0..Stencil::<D>::LEN {
+            let g = pts.f[p].transpose() * st.grad[c];
+            let fi = pk1 * g * pts.vol0[p];
+            let a = ws.dof_of[st.nodes[c]];
+            for i in 0..D {
+                ws.res[a * D + i] -= fi[i];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Largest nodal contribution of the internal force, the scale of the residual's round-off.
+fn internal_force_scale<const D: usize>(pts: &Points<D>, ws: &Workspace<D>) -> f64 {
+    let mut s: f64 = 0.0;
+    for (p, st) in ws.stencils.iter().enumerate() {
+        for c in 0..Stencil::<D>::LEN {
+            let g = pts.f[p].transpose() * st.grad[c];
+            s = s.max((ws.pk1[p] * g).norm() * pts.vol0[p]);
+        }
+    }
+    s
+}
+
+/// Builds K = M/Δt² + Σ_p V_p⁰ G·A·G (Eq. A.3) with the bound dofs' rows replaced by identity, and
+/// solves K Δu = R (Eq. 15); bound dofs get Δu = their target − u.
+fn assemble_and_solve<const D: usize>(
+    pts: &Points<D>,
+    ws: &mut Workspace<D>,
+    dt: f64,
+    step: usize,
+) -> Result<(), String> {
+    let ndof = ws.res.len();
+    ws.trip.clear();
+    for k in 0..ndof {
+        if ws.state[k] == DofState::Free {
+            ws.trip.push(Triplet::new(k, k, ws.mass_dof[k] / (dt * dt)));
+        } else {
+            ws.trip.push(Triplet::new(k, k, 1.0));
+        }
+    }
+    let n = Stencil::<D>::LEN;
+    for (p, st) in ws.stencils.iter().enumerate() {
+        let a4 = &ws.tangent[p];
+        let ft = pts.f[p].transpose();
+        for ca in 0..n {
+            let ga = ft * st.grad[ca];
+            let ra = ws.dof_of[st.nodes[ca]];
+            for cb in 0..n {
+                let gb = ft * st.grad[cb];
+                let rb = ws.dof_of[st.nodes[cb]];
+                for i in 0..D {
+                    let row = ra * D + i;
+                    if ws.state[row] != DofState::Free {
+                        continue;
+                    }
+                    for k in 0..D {
+                        let mut v = 0.0;
+                        for aa in 0..D {
+                            for bb in 0..D {
+                                v += ga[aa] * a4[i][aa][k][bb] * gb[bb];
+                            }
+                        }
+                        ws.trip.push(Triplet::new(row, rb * D + k, v * pts.vol0[p]));
+                    }
+                }
+            }
+        }
+    }
+    let k = SparseColMat::<usize, f64>::try_new_from_triplets(ndof, ndof, &ws.trip)
+        .map_err(|e| format!("step {step}: cannot assemble the stiffness matrix: {e:?}"))?;
+    let sym = SymbolicLu::try_new(k.symbolic())
+        .map_err(|e| format!("step {step}: sparse LU (symbolic) failed: {e:?}"))?;
+    let lu = Lu::try_new_with_symbolic(sym, k.as_ref())
+        .map_err(|e| format!("step {step}: sparse LU failed: {e:?}"))?;
+    let mut rhs = FMat::<f64>::from_fn(ndof, 1, |r, _| match ws.state[r] {
+        DofState::Free => ws.res[r],
+        DofState::Fixed(v) => v - ws.u[r],
+        DofState::Wall(_) => 0.0,
+    });
+    lu.solve_in_place(rhs.as_mut());
+    for r in 0..ndof {
+        ws.du[r] = rhs[(r, 0)];
+        if !ws.du[r].is_finite() {
+            return Err(format!("step {step}: singular stiffness matrix (non-finite Newton increment)"));
+        }
+    }
+    Ok(())
+}
+
+/// Moves the points with the converged grid motion: x += Σ N u, v by FLIP/PIC, F = ΔF F,
+/// V = J V⁰ (Eq. 13), σ = P Fᵀ / J (Eq. 9).
+fn update_points<const D: usize>(
+    pts: &mut Points<D>,
+    law: &Law,
+    ws: &Workspace<D>,
+    dt: f64,
+    flip: f64,
+    step: usize,
+) -> Result<(), String> {
+    for (p, st) in ws.stencils.iter().enumerate() {
+        let mut dx = Vector::<D>::zeros();
+        let mut v_new = Vector::<D>::zeros();
+        let mut dv = Vector::<D>::zeros();
+        for c in 0..Stencil::<D>::LEN {
+            let a = ws.dof_of[st.nodes[c]];
+            for d in 0..D {
+                let u = ws.u[a * D + d];
+                dx[d] += st.n[c] * u;
+                v_new[d] += st.n[c] * u / dt;
+                dv[d] += st.n[c] * (u / dt - ws.v_old[a * D + d]);
+            }
+        }
+        let f = incremental_gradient(st, &ws.dof_of, &ws.u) * pts.f[p];
+        let j = det(&f);
+        let pk1 = law
+            .pk1(&f)
+            .map_err(|e| format!("step {step}: material point {p} inverted (J = {:.3e})", e.det))?;
+        pts.x[p] += dx;
+        pts.v[p] = (pts.v[p] + dv) * flip + v_new * (1.0 - flip);
+        pts.f[p] = f;
+        pts.vol[p] = j * pts.vol0[p];
+        pts.sigma[p] = pk1 * f.transpose() / j;
+    }
+    Ok(())
+}

@@ -1,0 +1,231 @@
+//! JSON scenes of `mcdem mpm`: one body (disc/sphere or block), its law, the grid resolution, the
+//! walls and the time stepping. Every value is validated with a message naming the problem.
+
+use serde::Deserialize;
+
+use super::constitutive::{Hooke, Law, NeoHookean, SaintVenantKirchhoff};
+use super::grid::{Grid, Vector};
+use super::implicit::{Body, Newton, StepOptions, Wall};
+use super::points::Points;
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// 2 (plane strain) or 3.
+    pub dimension: usize,
+    pub material: MaterialSpec,
+    pub body: BodySpec,
+    pub grid: GridSpec,
+    #[serde(default)]
+    pub walls: Vec<WallSpec>,
+    /// Time step Δt [s].
+    pub dt: f64,
+    /// Number of steps.
+    pub steps: usize,
+    /// Write a row every this many steps (and the last one).
+    #[serde(default = "one")]
+    pub output_every: usize,
+    #[serde(default)]
+    pub gravity: Vec<f64>,
+    #[serde(default)]
+    pub newton: Option<NewtonSpec>,
+    /// FLIP fraction of the point velocity update (1 = FLIP, 0 = PIC).
+    #[serde(default = "one_f")]
+    pub flip: f64,
+}
+
+fn one() -> usize {
+    1
+}
+fn one_f() -> f64 {
+    1.0
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// "hooke", "svk" or "neohookean".
+    pub law: String,
+    /// Lamé λ [Pa].
+    pub lambda: f64,
+    /// Shear modulus μ [Pa].
+    pub mu: f64,
+    /// Density ρ [kg/m³].
+    pub density: f64,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
+pub enum BodySpec {
+    /// Disc (2-D) or sphere (3-D).
+    Disc {
+        center: Vec<f64>,
+        radius: f64,
+    },
+    Block {
+        lo: Vec<f64>,
+        hi: Vec<f64>,
+    },
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Cell size h [m].
+    pub h: f64,
+    /// Material points per cell and axis.
+    pub points_per_cell: usize,
+    /// Empty cells around the body's bounding box (room to deform into).
+    #[serde(default = "three")]
+    pub margin: usize,
+}
+
+fn three() -> usize {
+    3
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    pub axis: usize,
+    /// +1: the body is on the side of larger coordinates, −1: smaller.
+    pub side: f64,
+    pub position: f64,
+    #[serde(default)]
+    pub velocity: f64,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NewtonSpec {
+    pub eps1: f64,
+    pub eps2: f64,
+    pub max_iter: usize,
+}
+
+/// Membership test of the body's shape.
+type Inside<const D: usize> = Box<dyn Fn(&Vector<D>) -> bool>;
+
+/// Everything a run needs, built from a validated scene.
+pub struct Setup<const D: usize> {
+    pub body: Body<D>,
+    pub walls: Vec<Wall>,
+    pub options: StepOptions,
+}
+
+impl Scene {
+    pub fn from_json(text: &str) -> Result<Self, String> {
+        serde_json::from_str(text).map_err(|e| format!("scene: {e}"))
+    }
+
+    pub fn law(&self) -> Result<Law, String> {
+        let m = &self.material;
+        if !(m.density.is_finite() && m.density > 0.0) {
+            return Err(format!("material: density must be positive, got {}", m.density));
+        }
+        let (l, mu) = (m.lambda, m.mu);
+        Ok(match m.law.as_str() {
+            "hooke" => Law::Hooke(Hooke::new(l, mu)?),
+            "svk" => Law::SaintVenantKirchhoff(SaintVenantKirchhoff::new(l, mu)?),
+            "neohookean" => Law::NeoHookean(NeoHookean::new(l, mu)?),
+            other => return Err(format!("material: unknown law \"{other}\" (hooke, svk, neohookean)")),
+        })
+    }
+
+    /// Validates the scene and builds the body, its grid and walls.
+    pub fn setup<const D: usize>(&self) -> Result<Setup<D>, String> {
+        if self.dimension != D {
+            return Err(format!("dimension must be 2 or 3, got {}", self.dimension));
+        }
+        let law = self.law()?;
+        let g = &self.grid;
+        if !(g.h.is_finite() && g.h > 0.0) {
+            return Err(format!("grid: cell size h must be positive, got {}", g.h));
+        }
+        if g.points_per_cell == 0 {
+            return Err("grid: points_per_cell must be at least 1".into());
+        }
+        if !(self.dt.is_finite() && self.dt > 0.0) {
+            return Err(format!("dt must be positive, got {}", self.dt));
+        }
+        if self.steps == 0 || self.output_every == 0 {
+            return Err("steps and output_every must be at least 1".into());
+        }
+        if !(0.0..=1.0).contains(&self.flip) {
+            return Err(format!("flip must lie in [0, 1], got {}", self.flip));
+        }
+        let vec = |v: &[f64], what: &str| -> Result<Vector<D>, String> {
+            if v.len() != D || v.iter().any(|x| !x.is_finite()) {
+                return Err(format!("body: {what} needs {D} finite coordinates, got {v:?}"));
+            }
+            Ok(Vector::<D>::from_fn(|d, _| v[d]))
+        };
+        let (lo, hi, inside): (Vector<D>, Vector<D>, Inside<D>) = match &self.body {
+            BodySpec::Disc { center, radius } => {
+                let c = vec(center, "center")?;
+                if !(radius.is_finite() && *radius > 0.0) {
+                    return Err(format!("body: radius must be positive, got {radius}"));
+                }
+                let r = *radius;
+                (c.add_scalar(-r), c.add_scalar(r), Box::new(move |x: &Vector<D>| (x - c).norm() < r))
+            }
+            BodySpec::Block { lo, hi } => {
+                let (l, h) = (vec(lo, "lo")?, vec(hi, "hi")?);
+                if (0..D).any(|d| h[d] <= l[d]) {
+                    return Err(format!("body: block hi {hi:?} must exceed lo {lo:?} on every axis"));
+                }
+                (l, h, Box::new(move |x: &Vector<D>| (0..D).all(|d| x[d] > l[d] && x[d] < h[d])))
+            }
+        };
+        // The grid starts at the body's lower corner minus the margin, so that a body resting on a
+        // wall through its bounding box has that wall on a grid line.
+        let origin = lo.add_scalar(-(g.margin as f64) * g.h);
+        let cells: [usize; D] =
+            std::array::from_fn(|d| ((hi[d] - lo[d]) / g.h - 1e-9).ceil() as usize + 2 * g.margin);
+        let grid = Grid::new(origin, g.h, cells)?;
+        let points = Points::seed(lo, hi, origin, g.h, g.points_per_cell, self.material.density, inside);
+        if points.is_empty() {
+            return Err("body: no material point falls inside the body (refine the grid)".into());
+        }
+        let mut walls = Vec::new();
+        for (w, ws) in self.walls.iter().enumerate() {
+            if ws.axis >= D || !(ws.side == 1.0 || ws.side == -1.0) {
+                return Err(format!(
+                    "wall {w}: axis must be below {D} and side ±1 (got axis {}, side {})",
+                    ws.axis, ws.side
+                ));
+            }
+            if !ws.position.is_finite() || !ws.velocity.is_finite() {
+                return Err(format!("wall {w}: position and velocity must be finite"));
+            }
+            if let Some(p) = points.x.iter().position(|x| ws.side * (x[ws.axis] - ws.position) < 0.0) {
+                return Err(format!(
+                    "wall {w}: material point {p} at {:?} starts on the wrong side of the wall (overlap at start)",
+                    points.x[p].as_slice()
+                ));
+            }
+            walls.push(Wall { axis: ws.axis, side: ws.side, position: ws.position, velocity: ws.velocity });
+        }
+        let mut gravity = [0.0; 3];
+        if !self.gravity.is_empty() {
+            if self.gravity.len() != D {
+                return Err(format!("gravity needs {D} components, got {}", self.gravity.len()));
+            }
+            gravity[..D].copy_from_slice(&self.gravity);
+        }
+        let newton = match &self.newton {
+            None => Newton::default(),
+            Some(n) => {
+                if !(n.eps1 > 0.0 && n.eps2 > 0.0 && n.max_iter > 0) {
+                    return Err("newton: eps1, eps2 and max_iter must be positive".into());
+                }
+                Newton { eps1: n.eps1, eps2: n.eps2, max_iter: n.max_iter }
+            }
+        };
+        Ok(Setup {
+            body: Body { grid, points, law },
+            walls,
+            options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip },
+        })
+    }
+}
