@@ -123,16 +123,22 @@ fn particle_between_moving_plates_matches_liggghts_step_by_step() {
     let (o, t) = run_both(&deck, &[&meshes], &[]);
     let f = "post/plates.dump";
     assert_dumps_agree(&o.path().join(f), &t.path().join(f), 1e-6);
-    // The mesh/surface/stress force written by fix ave/time (read with polars): same rows.
+    assert_plate_forces_agree(o.path(), t.path());
+}
+
+/// The mesh/surface/stress force f_plate[3] written by fix ave/time (read with polars; LIGGGHTS
+/// prints 6 digits): the same rows and values to 1e-5 of the largest. Returns that largest [N].
+fn assert_plate_forces_agree(ours: &Path, theirs: &Path) -> f64 {
     let read = |d: &Path| frames::ave_time(&d.join("post/plates_force.txt"));
-    let (a, b) = (read(o.path()), read(t.path()));
+    let (a, b) = (read(ours), read(theirs));
     assert_eq!(frames::values(&a, "TimeStep"), frames::values(&b, "TimeStep"));
     let name = b.get_column_names()[3].to_string();
     let (fa, fb) = (frames::values(&a, &name), frames::values(&b, &name));
     let scale = fb.iter().map(|v| v.abs()).fold(0.0, f64::max);
     for (k, (x, y)) in fa.iter().zip(&fb).enumerate() {
-        assert!((x - y).abs() <= 1e-5 * scale, "row {k}: {x} vs {y}");
+        assert!((x - y).abs() <= 1e-5 * scale, "row {k}: plate force {x} vs {y}");
     }
+    scale
 }
 
 /// The plate deck with the sphere exactly over the diagonal x = y along which the plate's two
@@ -153,16 +159,9 @@ fn a_sphere_over_the_shared_edge_of_a_plate_matches_liggghts() {
         println!("sphere at ({px}, {py})");
         let f = "post/plates.dump";
         assert_dumps_agree(&o.path().join(f), &t.path().join(f), 1e-9);
-        // The plate force (fix ave/time, LIGGGHTS' 6 printed digits): the same rows, and not zero.
-        let read = |d: &Path| frames::ave_time(&d.join("post/plates_force.txt"));
-        let (a, b) = (read(o.path()), read(t.path()));
-        let name = b.get_column_names()[3].to_string();
-        let (fa, fb) = (frames::values(&a, &name), frames::values(&b, &name));
-        let scale = fb.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        // The plate force: the same rows, and not zero.
+        let scale = assert_plate_forces_agree(o.path(), t.path());
         assert!(scale > 1e-3, "no plate force in LIGGGHTS ({scale:e} N)");
-        for (k, (x, y)) in fa.iter().zip(&fb).enumerate() {
-            assert!((x - y).abs() <= 1e-5 * scale, "row {k}: plate force {x} vs {y}");
-        }
     }
 }
 

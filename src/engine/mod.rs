@@ -1100,14 +1100,16 @@ impl World {
             self.build_wall_candidates(margin);
         }
         std::mem::swap(&mut self.wc, &mut self.wc_old);
-        let scene = wall_contacts::Scene {
-            walls: &self.walls,
-            meshes: &self.meshes,
-            x: &self.p.x,
-            radius: &self.p.radius,
-            reach_factor: self.mc_range,
-        };
-        wall_contacts::collect(&scene, &self.wall_cand, &self.wc_old, &mut self.wc, &mut self.wc_scratch);
+        // Taken out for the search (no allocation: the vectors move back with their capacity).
+        let (mut wc, mut scratch) = (std::mem::take(&mut self.wc), std::mem::take(&mut self.wc_scratch));
+        wall_contacts::collect(
+            &wall_contacts::Scene::of(self),
+            &self.wall_cand,
+            &self.wc_old,
+            &mut wc,
+            &mut scratch,
+        );
+        (self.wc, self.wc_scratch) = (wc, scratch);
         if self.wc.len() != self.wc_old.len()
             || self.wc.iter().zip(&self.wc_old).any(|(a, b)| a.key() != b.key())
         {
@@ -2550,13 +2552,7 @@ mod tests {
                 }
             }
         }
-        let scene = wall_contacts::Scene {
-            walls: &w.walls,
-            meshes: &w.meshes,
-            x: &w.p.x,
-            radius: &w.p.radius,
-            reach_factor: w.mc_range,
-        };
+        let scene = wall_contacts::Scene::of(w);
         let (mut out, mut scratch) = (Vec::new(), Vec::new());
         wall_contacts::collect(&scene, &all, &w.wc_old, &mut out, &mut scratch);
         out.iter().map(WallContact::key).collect()

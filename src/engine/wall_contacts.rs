@@ -26,6 +26,13 @@ pub(super) struct Scene<'a> {
     pub reach_factor: f64,
 }
 
+impl<'a> Scene<'a> {
+    /// What the world's particles and walls give the search.
+    pub fn of(w: &'a super::World) -> Self {
+        Scene { walls: &w.walls, meshes: &w.meshes, x: &w.p.x, radius: &w.p.radius, reach_factor: w.mc_range }
+    }
+}
+
 /// Fills `out` with the contacts among `cands` (in their order, which is the key order), taking
 /// history from `old` (sorted by key).
 pub(super) fn collect(
