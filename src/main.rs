@@ -124,6 +124,8 @@ enum Command {
         #[command(subcommand)]
         study: Study,
     },
+    /// Compare two LIGGGHTS-format outputs (dump custom, fix ave/time or fix print tables) column by column
+    Compare(mcdem::compare::Args),
     /// Run the validation suite and write the report
     Validate {
         /// Quick subset (CI)
@@ -476,6 +478,8 @@ fn main() -> ExitCode {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)
         }
         Command::Study { study: s } => study(s),
+        // Its own exit statuses (0 agree, 1 differ, 2 unreadable input): see docs/compare.md.
+        Command::Compare(args) => return mcdem::compare::cli(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
