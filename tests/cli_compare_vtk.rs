@@ -1,5 +1,5 @@
 //! `mcdem compare` on real outputs, and the VTK files of `mcdem run` read back by an independent
-//! reader (Python meshio, installed by tests/run.sh).
+//! reader (VTK's Python package, installed by tests/run.sh).
 //!
 //! The LIGGGHTS comparison needs `liggghts` (tests/run.sh installs it): without it the test fails,
 //! unless MCDEM_NO_LIGGGHTS=1 says it is absent on purpose.
@@ -149,10 +149,11 @@ fn compare_liggghts_and_mcdem_runs_of_one_deck() {
     let o = c.output().unwrap();
     assert!(o.status.success(), "liggghts failed: {}", text(&o));
     // docs/compare.md: on this short, ordered deck the two engines agree to round-off and the
-    // dump's 10 printed digits; 1e-6 of each column's range leaves room for both.
+    // dump's 10 printed digits. The tolerance is set by omegaz, zero by symmetry up to round-off
+    // (range ~1e-5 rad/s), whose differences reach ~2e-6 of that range; all else is below 1e-10.
     for f in ["post/bcc.dump", "post/force.txt"] {
         let (a, b) = (theirs.path().join(f), ours.path().join(f));
-        let o = mcdem(ours.path(), &["compare", a.to_str().unwrap(), b.to_str().unwrap(), "--tol", "1e-6"]);
+        let o = mcdem(ours.path(), &["compare", a.to_str().unwrap(), b.to_str().unwrap(), "--tol", "1e-5"]);
         assert_eq!(o.status.code(), Some(0), "{f}: {}", text(&o));
     }
 }
@@ -171,40 +172,55 @@ fn vtk_run() -> tempfile::TempDir {
     d
 }
 
-/// meshio reads a VTK file and prints what the test checks, as JSON.
-fn meshio(path: &Path) -> serde_json::Value {
+/// VTK's own Python reader (the `vtk` package; meshio's legacy reader has no POLYDATA, the
+/// dataset LIGGGHTS writes) reads a file and prints what the test checks, as JSON.
+fn read_vtk(path: &Path) -> serde_json::Value {
     let script = r#"
-import json, sys, meshio
-m = meshio.read(sys.argv[1])
+import json, sys, vtk
+from vtk.util.numpy_support import vtk_to_numpy
+r = vtk.vtkPolyDataReader()
+r.SetFileName(sys.argv[1])
+r.ReadAllFieldsOn()
+r.Update()
+if r.GetErrorCode() != 0:
+    sys.exit("read error %d" % r.GetErrorCode())
+d = r.GetOutput()
+def arrays(a):
+    return {a.GetArrayName(k): vtk_to_numpy(a.GetArray(k)).tolist() for k in range(a.GetNumberOfArrays())}
 print(json.dumps({
-    "points": m.points.tolist(),
-    "cells": sum(len(c.data) for c in m.cells),
-    "point_data": {k: v.tolist() for k, v in m.point_data.items()},
-    "cell_data": {k: [x.tolist() for x in v] for k, v in m.cell_data.items()},
+    "points": vtk_to_numpy(d.GetPoints().GetData()).tolist() if d.GetPoints() else [],
+    "cells": d.GetNumberOfCells(),
+    "point_data": arrays(d.GetPointData()),
+    "cell_data": arrays(d.GetCellData()),
 }))
 "#;
     let o = Command::new("python3").arg("-c").arg(script).arg(path).output().expect("python3 starts");
-    assert!(o.status.success(), "meshio could not read {}: {}", path.display(), text(&o));
+    assert!(o.status.success(), "python vtk could not read {}: {}", path.display(), text(&o));
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
 #[test]
-fn vtk_files_read_back_by_meshio_match_the_text_dump() {
+fn vtk_files_read_back_by_python_vtk_match_the_text_dump() {
     let d = vtk_run();
     let frames = mcdem::outputs::read_dump(&d.path().join("post/bcc.dump")).unwrap();
     for step in [1000u64, 3000] {
         let f = frames.iter().find(|f| f.step == step).expect("text frame");
-        let v = meshio(&d.path().join(format!("post/p{step}.vtk")));
+        let v = read_vtk(&d.path().join(format!("post/p{step}.vtk")));
         let pts = v["points"].as_array().unwrap();
         assert_eq!(pts.len(), f.rows.len(), "point count at step {step}");
-        // Points are written as VTK floats (single precision): agreement to a few 1e-7 relative.
+        // Points are VTK floats printed with %g (six significant digits, as LIGGGHTS): a relative
+        // error up to 5e-6.
         let (x, vx, r) = (f.column("x").unwrap(), f.column("vx").unwrap(), f.column("radius").unwrap());
         let vv = v["point_data"]["v"].as_array().expect("vector array v");
         let rad = v["point_data"]["radius"].as_array().expect("array radius");
         for (k, row) in f.rows.iter().enumerate() {
             for a in 0..3 {
                 let p = pts[k][a].as_f64().unwrap();
-                assert!((p - row[x + a]).abs() <= 1e-6 * row[x + a].abs().max(1e-3), "step {step} point {k}");
+                assert!(
+                    (p - row[x + a]).abs() <= 5e-6 * row[x + a].abs(),
+                    "step {step} point {k}: {p} vs {}",
+                    row[x + a]
+                );
             }
             // Doubles: 11 digits in the VTK file, 10 in the text dump.
             let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-12);
@@ -214,7 +230,7 @@ fn vtk_files_read_back_by_meshio_match_the_text_dump() {
         // The walls: one cell per STL triangle (two meshes made of meshes/die_face.stl).
         let stl = std::fs::read_to_string(repo().join("liggghts_inputs/meshes/die_face.stl")).unwrap();
         let tris = stl.lines().filter(|l| l.trim_start().starts_with("facet")).count();
-        let m = meshio(&d.path().join(format!("post/m{step}.vtk")));
+        let m = read_vtk(&d.path().join(format!("post/m{step}.vtk")));
         assert_eq!(m["cells"].as_u64().unwrap() as usize, 2 * tris, "mesh cells at step {step}");
         let cd = m["cell_data"].as_object().unwrap();
         for name in ["normal_stress_average", "shear_stress_average", "stress", "meshid", "v"] {
