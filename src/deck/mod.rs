@@ -1,8 +1,8 @@
 //! LIGGGHTS deck reader: variables, commands → engine setup, `run`, and LIGGGHTS-format output.
 //!
-//! The accepted subset is documented in `docs/dem.md`. Output-only commands the engine does not
-//! write (`dump custom/vtk`, `dump mesh/vtk`, `compute_modify`) are skipped with a one-line
-//! warning; every other unknown command or keyword stops with `ERROR: FILE:LINE: unsupported …`,
+//! The accepted subset is documented in `docs/dem.md`. Output-only commands without effect here
+//! (`compute_modify`) are skipped with a one-line warning; every other unknown command or keyword
+//! stops with `ERROR: FILE:LINE: unsupported …`,
 //! because a silently ignored setting would give a different simulation.
 
 pub mod expr;
