@@ -51,7 +51,8 @@ fn with_marker(df: &DataFrame, marker: &str) -> PolarsResult<DataFrame> {
 }
 
 fn suffixed(input: &Input, suffix: &str) -> PolarsResult<DataFrame> {
-    let mut df = input.frame.clone();
+    // Only the keys and the compared columns (`--columns` may have left some out).
+    let mut df = input.frame.select(input.keys.iter().chain(&input.values).map(String::as_str))?;
     for v in &input.values {
         df.rename(v, format!("{v}_{suffix}").into())?;
     }

@@ -31,6 +31,10 @@ pub struct Args {
     /// FILE.csv or FILE.parquet
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Compare only these value columns (comma-separated), e.g. the load of a force table whose
+    /// lateral components are noise
+    #[arg(long, value_delimiter = ',')]
+    pub columns: Vec<String>,
 }
 
 /// The verdict of one comparison.
@@ -64,8 +68,18 @@ pub fn run(args: &Args, out: &mut dyn std::io::Write) -> Result<Verdict, String>
     if let Some(p) = &args.out {
         out_format(p)?;
     }
-    let a = read(&args.a)?;
-    let b = read(&args.b)?;
+    let mut a = read(&args.a)?;
+    let mut b = read(&args.b)?;
+    if !args.columns.is_empty() {
+        for c in &args.columns {
+            if !a.values.contains(c) && !b.values.contains(c) {
+                return Err(format!("--columns: no numeric column '{c}' in {} or {}", a.name, b.name));
+            }
+        }
+        for i in [&mut a, &mut b] {
+            i.values.retain(|v| args.columns.contains(v));
+        }
+    }
     let mut c = compare(&a, &b)?;
     let report = report(&a, &b, &c, args.tol);
     out.write_all(report.as_bytes()).map_err(|e| format!("cannot write the report: {e}"))?;

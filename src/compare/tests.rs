@@ -97,3 +97,16 @@ fn tables_join_on_their_step_column() {
     let names: Vec<String> = c.joined.get_column_names().iter().map(|s| s.to_string()).collect();
     assert_eq!(names, ["TimeStep", "f_p[3]_a", "f_p[3]_b", "f_p[3]_diff"]);
 }
+
+#[test]
+fn columns_option_restricts_the_comparison() {
+    let d = tempfile::tempdir().unwrap();
+    let (a, b) = (d.path().join("a.txt"), d.path().join("b.txt"));
+    std::fs::write(&a, "# TimeStep f[1] f[3]\n100 0.01 5\n200 -0.01 6\n").unwrap();
+    std::fs::write(&b, "# TimeStep f[1] f[3]\n100 0.02 5\n200 -0.01 6\n").unwrap();
+    let args = |columns: Vec<String>| Args { a: a.clone(), b: b.clone(), tol: 1e-3, out: None, columns };
+    let mut sink = Vec::new();
+    assert!(matches!(run(&args(vec![]), &mut sink), Ok(Verdict::Fail(w)) if w.contains("f[1]")));
+    assert_eq!(run(&args(vec!["f[3]".into()]), &mut sink), Ok(Verdict::Pass));
+    assert!(run(&args(vec!["g".into()]), &mut sink).unwrap_err().contains("no numeric column 'g'"));
+}
