@@ -7,8 +7,8 @@
 //! - tables of `fix ave/time … file` and `fix print … file`: `#` comment lines, then one row of
 //!   values per output step. `fix ave/time` names its columns in its last comment line
 //!   (`# TimeStep f_a[1] …`); `fix print` writes only `# Fix print output for fix ID` (or its
-//!   `title`), so its columns are named `c1`, `c2`, … unless the last comment line has exactly one
-//!   word per value. The first column is the step the rows are joined on.
+//!   `title`, written as a plain first line), so its columns are named `c1`, `c2`, … unless that
+//!   line has exactly one word per value. The first column is the step the rows are joined on.
 
 use std::path::Path;
 
@@ -139,6 +139,10 @@ fn table(text: &str, name: &str) -> Result<Input, String> {
                 return Err(format!("{name}:{}: comment line after data rows", no + 1));
             }
             header = Some(c.split_whitespace().map(str::to_owned).collect());
+        } else if rows.is_empty() && line.split_whitespace().next().is_some_and(|w| w.parse::<f64>().is_err())
+        {
+            // `fix print … title "…"` writes its title as the first line, without a `#`.
+            header = Some(line.split_whitespace().map(str::to_owned).collect());
         } else if !line.trim().is_empty() {
             let words: Vec<&str> = line.split_whitespace().collect();
             if let Some((_, w)) = rows.first() {
@@ -246,6 +250,12 @@ mod tests {
         let i = parse(t, "a").unwrap();
         assert_eq!((i.kind, i.keys[0].as_str()), (Kind::Table, "TimeStep"));
         assert_eq!(i.values, ["f_p[1]", "f_p[3]"]);
+    }
+
+    #[test]
+    fn fix_print_title_names_columns() {
+        let i = parse("step t fz\n500 time 3.3e-05\n1000 time 8.6e-05\n", "p").unwrap();
+        assert_eq!((i.keys[0].as_str(), i.values.clone()), ("step", vec!["fz".to_string()]));
     }
 
     #[test]
