@@ -7,6 +7,7 @@
 
 pub mod bench;
 pub mod checks;
+pub mod compare;
 pub mod contacts_cli;
 pub mod deck;
 pub mod engine;

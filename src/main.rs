@@ -132,7 +132,8 @@ enum Command {
         #[arg(long, default_value = "mpm_out")]
         out: PathBuf,
     },
-    /// Run the validation suite and write the report
+    /// Compare two LIGGGHTS-format outputs (dump custom, fix ave/time or fix print tables) column by column
+    Compare(mcdem::compare::Args),
     /// Make a packing of the project's own: `hydrogel` is the 514-sphere packing of the uniaxial
     /// case (validation/cases/uniaxial/README.md); `--describe FILE` prints the statistics of a
     /// LIGGGHTS data file of that box instead (e.g. the Debian example's, to compare)
@@ -150,6 +151,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         describe: Option<PathBuf>,
     },
+    /// Run the validation suite and write the report
     Validate {
         /// Quick subset (CI)
         #[arg(long)]
@@ -537,6 +539,8 @@ fn main() -> ExitCode {
         }
         Command::Study { study: s } => study(s),
         Command::Mpm { scene, out } => mcdem::mpm::cli::run(&scene, &out),
+        // Its own exit statuses (0 agree, 1 differ, 2 unreadable input): see docs/compare.md.
+        Command::Compare(args) => return mcdem::compare::cli(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

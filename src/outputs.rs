@@ -55,10 +55,10 @@ pub fn parse_dump(text: &str, name: &str) -> Result<Vec<Frame>, String> {
                     .map_err(|_| format!("{name}:{}: not a number in '{l}'", n2 + 1))?;
                 if row.len() != f.columns.len() {
                     return Err(format!(
-                        "{name}:{}: {} values for {} columns",
+                        "{name}:{}: expected {} values, found {}",
                         n2 + 1,
-                        row.len(),
-                        f.columns.len()
+                        f.columns.len(),
+                        row.len()
                     ));
                 }
                 f.rows.push(row);
@@ -131,7 +131,7 @@ mod tests {
         let bad = DUMP.replace("0.25", "x");
         assert_eq!(parse_dump(&bad, "d").unwrap_err(), "d:11: not a number in '2 x 2 '");
         let cols = DUMP.replace("2 0.25 2 ", "2 0.25");
-        assert!(parse_dump(&cols, "d").unwrap_err().contains("2 values for 3 columns"));
+        assert!(parse_dump(&cols, "d").unwrap_err().contains("expected 3 values, found 2"));
     }
 
     #[test]

@@ -1,5 +1,5 @@
-//! Deck reader behaviour: unknown input stops with FILE:LINE, output-only commands are skipped with
-//! a warning, -var overrides index variables, bad values are named.
+//! Deck reader behaviour: unknown input stops with FILE:LINE, VTK dumps are written, -var overrides
+//! index variables, bad values are named.
 
 use std::process::Command;
 
@@ -47,10 +47,12 @@ fn unknown_command_names_file_and_line() {
 }
 
 #[test]
-fn vtk_dumps_are_skipped_with_a_warning() {
+fn vtk_dumps_are_written_and_unsupported_forms_stop() {
+    // The files themselves are checked in tests/cli_compare_vtk.rs.
     let (ok, out) = run_deck(&format!("{BASE}dump d all custom/vtk 10 post/x*.vtk id x\nrun 10\n"), &[]);
-    assert!(ok, "{out}");
-    assert!(out.contains("WARNING: dump d (custom/vtk) is not written"), "{out}");
+    assert!(ok && !out.contains("WARNING"), "{out}");
+    let (ok, out) = run_deck(&format!("{BASE}dump d all custom/vtk 10 post/x*.vtu id x\nrun 10\n"), &[]);
+    assert!(!ok && out.contains("in.test:17: unsupported dump custom/vtk to post/x*.vtu"), "{out}");
 }
 
 #[test]

@@ -19,10 +19,13 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q "${missing[@]}"
 fi
 
+# VTK's Python package: the independent reader the VTK dump test opens mcdem's files with.
+python3 -c "import vtk" 2>/dev/null || python3 -m pip install --quiet vtk
+
 cargo fmt --check
 # Lints for the plain build (nothing but cargo: library and binaries) and for everything with the
 # LIGGGHTS plugin (feature `liggghts`; tests and benches included). The tests' dev-dependencies
-# (polars among them) are checked once, in the second run.
+# are checked once, in the second run.
 cargo clippy --release --lib --bins -- -D warnings
 cargo clippy --release --all-targets --features liggghts -- -D warnings
 # One test run covers everything: the feature only adds the C++ shim, `mcdem-liggghts` and its tests.

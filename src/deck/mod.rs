@@ -1,14 +1,15 @@
 //! LIGGGHTS deck reader: variables, commands → engine setup, `run`, and LIGGGHTS-format output.
 //!
-//! The accepted subset is documented in `docs/dem.md`. Output-only commands the engine does not
-//! write (`dump custom/vtk`, `dump mesh/vtk`, `compute_modify`) are skipped with a one-line
-//! warning; every other unknown command or keyword stops with `ERROR: FILE:LINE: unsupported …`,
+//! The accepted subset is documented in `docs/dem.md`. Output-only commands without effect here
+//! (`compute_modify`) are skipped with a one-line warning; every other unknown command or keyword
+//! stops with `ERROR: FILE:LINE: unsupported …`,
 //! because a silently ignored setting would give a different simulation.
 
 pub mod expr;
 pub mod format;
 mod local;
 pub mod output;
+mod vtk;
 
 use std::collections::HashMap;
 use std::fmt;
@@ -242,6 +243,7 @@ struct Deck {
     thermo_float: Option<format::Spec>,
     dumps: Vec<Dump>,
     local_dumps: Vec<local::LocalDump>,
+    vtk_dumps: Vec<vtk::VtkDump>,
     pair_locals: HashMap<String, local::PairLocal>,
     aves: Vec<Option<AveTime>>,
     progress: bool,
@@ -381,6 +383,7 @@ impl Deck {
             thermo_float: None,
             dumps: Vec::new(),
             local_dumps: Vec::new(),
+            vtk_dumps: Vec::new(),
             pair_locals: HashMap::new(),
             aves: Vec::new(),
             progress: opts.progress,
@@ -853,6 +856,7 @@ impl Deck {
                 need(2)?;
                 self.dumps.retain(|d| d.name != a[1]);
                 self.local_dumps.retain(|d| d.name != a[1]);
+                self.vtk_dumps.retain(|d| d.name != a[1]);
             }
             "variable" => self.variable(&a)?,
             "label" => need(2)?,
@@ -1472,10 +1476,7 @@ impl Deck {
             return Err("dump: expected 'dump ID group style N file …'".into());
         }
         match a[3] {
-            "custom/vtk" | "mesh/vtk" => {
-                self.warn(&format!("dump {} ({}) is not written by mcdem: skipped", a[1], a[3]));
-                return Ok(());
-            }
+            "custom/vtk" | "mesh/vtk" => return self.dump_vtk(a),
             "custom" => {}
             "local" => {
                 if a[2] != "all" {
@@ -1510,12 +1511,35 @@ impl Deck {
         Ok(())
     }
 
+    /// `dump ID group custom/vtk|mesh/vtk N FILE …` (see `vtk.rs`).
+    fn dump_vtk(&mut self, a: &[&str]) -> R<()> {
+        if a.len() < 7 {
+            return Err(format!("dump {}: expected N file and at least one column or keyword", a[3]));
+        }
+        if a[2] != "all" {
+            return Err(unsupported(&format!("dump group '{}' (all)", a[2])));
+        }
+        let every = int(a[4])?;
+        if every <= 0 {
+            return Err("dump: N must be > 0".into());
+        }
+        let d = if a[3] == "custom/vtk" {
+            vtk::VtkDump::particles(a[1], every as u64, a[5], &a[6..])?
+        } else {
+            let all = self.world.meshes.len();
+            vtk::VtkDump::mesh(a[1], every as u64, a[5], &a[6..], |f| self.mesh_index(f), all)?
+        };
+        self.vtk_dumps.push(d);
+        Ok(())
+    }
+
     fn dump_modify(&mut self, a: &[&str]) -> R<()> {
         let id = *a.get(1).ok_or("dump_modify: missing ID")?;
         let Some(d) = self.dumps.iter_mut().find(|d| d.name == id) else {
-            // Modifying a skipped VTK dump is as harmless as the dump itself.
-            self.warn(&format!("dump_modify {id}: no such written dump: skipped"));
-            return Ok(());
+            if self.vtk_dumps.iter().any(|d| d.name == id) {
+                return Err(unsupported(&format!("dump_modify of the VTK dump {id}")));
+            }
+            return Err(format!("dump_modify: no dump {id}"));
         };
         let mut k = 2;
         while k < a.len() {
@@ -1739,6 +1763,20 @@ impl Deck {
         for d in &mut self.local_dumps {
             if step % d.every == 0 && d.last != Some(step) {
                 d.write(&mut self.world, &self.pair_locals)?;
+            }
+        }
+        if !self.vtk_dumps.is_empty() {
+            // Meshes under a `fix move/mesh` carry a velocity LIGGGHTS writes; others have none.
+            let mut moving = vec![false; self.world.meshes.len()];
+            for (_, k) in &self.fixes {
+                if let FixKind::MoveMesh(m) = k {
+                    moving[*m] = true;
+                }
+            }
+            for d in &mut self.vtk_dumps {
+                if step % d.every == 0 && d.last != Some(step) {
+                    d.write(&self.world, &moving)?;
+                }
             }
         }
         Ok(())

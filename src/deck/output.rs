@@ -69,7 +69,7 @@ impl Col {
         matches!(self, Col::Id | Col::Type | Col::Image(_))
     }
 
-    fn value(&self, w: &World, i: usize) -> f64 {
+    pub(super) fn value(&self, w: &World, i: usize) -> f64 {
         let p = &w.p;
         match *self {
             Col::Id => p.id[i] as f64,

@@ -1564,6 +1564,18 @@ impl World {
         Ok(())
     }
 
+    /// Force the particles exerted on each triangle of mesh `mesh` in the last force pass (the
+    /// per-face share of `Mesh::force`, for `dump mesh/vtk`'s stresses).
+    pub fn mesh_face_forces(&self, mesh: usize) -> Vec<Vec3> {
+        let mut f = vec![Vec3::zeros(); self.meshes[mesh].tris.len()];
+        for (c, wf) in self.wc.iter().zip(&self.wall_force) {
+            if c.mesh as usize == mesh && matches!(self.walls[c.wall as usize].geom, WallGeom::Meshes(_)) {
+                f[c.tri as usize] -= *wf;
+            }
+        }
+        f
+    }
+
     /// Kernel calls that (re)computed an influence matrix under the geometry tolerance.
     pub fn mc_influence_updates(&self) -> u64 {
         self.mc_cache.as_ref().map_or(0, |c| c.recomputed)
