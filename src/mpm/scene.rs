@@ -5,7 +5,7 @@ use serde::Deserialize;
 
 use super::constitutive::{Hooke, Law, NeoHookean, SaintVenantKirchhoff};
 use super::grid::{Grid, Vector};
-use super::implicit::{Body, Newton, StepOptions, Wall};
+use super::implicit::{Body, Locking, Newton, StepOptions, Wall};
 use super::points::Points;
 
 #[derive(Clone, Debug, Deserialize)]
@@ -32,6 +32,11 @@ pub struct Scene {
     /// FLIP fraction of the point velocity update (1 = FLIP, 0 = PIC).
     #[serde(default = "one_f")]
     pub flip: f64,
+    /// Volumetric-locking remedy: "none" or "fbar" (see `implicit::Locking`); absent: "none", as
+    /// F-bar removes locking in the cantilever test but still stops in the line search on the
+    /// disc-between-plates scenes (docs/mpm.md).
+    #[serde(default)]
+    pub locking: Option<String>,
 }
 
 fn one() -> usize {
@@ -222,10 +227,15 @@ impl Scene {
                 Newton { eps1: n.eps1, eps2: n.eps2, max_iter: n.max_iter }
             }
         };
+        let locking = match self.locking.as_deref() {
+            None | Some("none") => Locking::None,
+            Some("fbar") => Locking::FBar,
+            Some(other) => return Err(format!("locking: unknown value \"{other}\" (fbar, none)")),
+        };
         Ok(Setup {
             body: Body { grid, points, law },
             walls,
-            options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip },
+            options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip, locking },
         })
     }
 }
