@@ -93,15 +93,18 @@ fn quick_validation_writes_the_report_contract() {
         let v = metric(case, model, key);
         assert!((v - measured).abs() <= 0.02 * measured, "{case} {model} {key}: {v} (measured {measured})");
     }
-    // Where the plugin ran, the LIGGGHTS rows carry the Rust DEM's NRMSE (the same law, the same
-    // deck) to 1e-3 of its value.
+    // Where the plugin ran, the LIGGGHTS rows carry the Rust DEM's NRMSE: Hertz and mc_advanced
+    // (the same law through the plugin) to 1e-4 of its value (measured: equal to the 5 printed
+    // digits); stock standard MC to 5e-3, since LIGGGHTS keeps the first partner's original radius
+    // in a pair (docs/dem.md: 1.6e-3 of the force range on this die; measured 1.6e-3 here).
     for case in ["single_particle", "bcc"] {
         let c = cases.iter().find(|c| c["name"] == case).unwrap();
         let models = c["models"].as_array().unwrap();
         for law in ["hertz", "standard_mc", "mc_advanced"] {
             let e = |name: &str| models.iter().find(|m| m["model"] == name).and_then(|m| m["nrmse"].as_f64());
             if let (Some(rust), Some(lig)) = (e(law), e(&format!("liggghts_{law}"))) {
-                assert!((rust - lig).abs() <= 1e-3 * rust, "{case} {law}: Rust {rust} vs LIGGGHTS {lig}");
+                let tol = if law == "standard_mc" { 5e-3 } else { 1e-4 };
+                assert!((rust - lig).abs() <= tol * rust, "{case} {law}: Rust {rust} vs LIGGGHTS {lig}");
             }
         }
     }
