@@ -7,6 +7,9 @@ use std::process::Output;
 
 use assert_cmd::Command;
 
+mod common;
+use common::present;
+
 /// `mcdem bench ARGS… FILE`.
 fn bench(args: &[&str], file: &Path) -> Output {
     Command::cargo_bin("mcdem").unwrap().arg("bench").args(args).arg(file).output().unwrap()
@@ -155,15 +158,4 @@ fn rounds_report_medians_ranges_and_targets() {
     let out = bench(&["--quick", "--scene", "kernel", "--rounds", "0", "--json"], &json);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--rounds must be at least 1"), "{err}");
-}
-
-/// A missing package fails the test unless the run says on purpose that this machine has none
-/// (MCDEM_NO_LIGGGHTS=1, README); tests/run.sh installs them all.
-fn present(ok: bool, what: &str) -> bool {
-    if !ok {
-        let skip = std::env::var("MCDEM_NO_LIGGGHTS").is_ok_and(|v| v == "1");
-        assert!(skip, "{what} is missing (tests/run.sh installs it; MCDEM_NO_LIGGGHTS=1 skips on purpose)");
-        eprintln!("MCDEM_NO_LIGGGHTS=1: {what} is missing, its rows are not checked");
-    }
-    ok
 }

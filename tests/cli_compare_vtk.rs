@@ -9,6 +9,8 @@ use std::process::{Command, Output};
 
 use polars::prelude::*;
 
+mod common;
+
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -50,17 +52,7 @@ fn run_mcdem(dir: &Path, deck: &Path, vars: &[String]) {
 }
 
 fn liggghts_wanted() -> bool {
-    let present = Command::new("liggghts").arg("-h").output().is_ok();
-    if present {
-        return true;
-    }
-    if std::env::var("MCDEM_NO_LIGGGHTS").as_deref() == Ok("1") {
-        eprintln!("liggghts not installed and MCDEM_NO_LIGGGHTS=1: LIGGGHTS comparison skipped on purpose");
-        return false;
-    }
-    panic!(
-        "liggghts is not installed (tests/run.sh installs it; set MCDEM_NO_LIGGGHTS=1 to skip on purpose)"
-    );
+    common::present(Command::new("liggghts").arg("-h").output().is_ok(), "the liggghts binary")
 }
 
 #[test]

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod common;
-use common::frames;
+use common::{frames, present};
 
 const HYDROGEL: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
 
@@ -19,16 +19,6 @@ fn have_liggghts() -> bool {
 /// Are the Debian hydrogel example's files there (package liggghts-doc)?
 fn have_hydrogel() -> bool {
     have_liggghts() && present(Path::new(HYDROGEL).exists(), HYDROGEL)
-}
-
-/// A missing package fails the test unless the run says on purpose that it is absent.
-fn present(ok: bool, what: &str) -> bool {
-    if !ok {
-        let skip = std::env::var("MCDEM_NO_LIGGGHTS").is_ok_and(|v| v == "1");
-        assert!(skip, "{what} is missing (tests/run.sh installs it; MCDEM_NO_LIGGGHTS=1 skips on purpose)");
-        eprintln!("MCDEM_NO_LIGGGHTS=1: {what} is missing, comparison skipped on purpose");
-    }
-    ok
 }
 
 fn repo() -> PathBuf {
