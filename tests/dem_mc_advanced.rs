@@ -6,12 +6,6 @@ use std::process::Command;
 
 /// Runs a deck; returns the dump text.
 fn run(deck: &str, vars: &[(&str, &str)]) -> String {
-    run_full(deck, vars).0
-}
-
-/// Runs a deck; returns the dump text, the plate force column f_plate[3] of the ave/time file [N]
-/// and the standard output.
-fn run_full(deck: &str, vars: &[(&str, &str)]) -> (String, Vec<f64>, String) {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
     let mut c = Command::new(env!("CARGO_BIN_EXE_mcdem"));
@@ -26,12 +20,7 @@ fn run_full(deck: &str, vars: &[(&str, &str)]) -> (String, Vec<f64>, String) {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     );
-    let force = mcdem::outputs::read_ave_time(&dir.path().join("post/plates_force.txt")).unwrap();
-    (
-        std::fs::read_to_string(Path::new(dir.path()).join("post/plates.dump")).unwrap(),
-        force.iter().map(|r| r[3]).collect(),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-    )
+    std::fs::read_to_string(Path::new(dir.path()).join("post/plates.dump")).unwrap()
 }
 
 /// (contact evaluations, capped) summed over the runs' "Multi-contact kernel" lines.
