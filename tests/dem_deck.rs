@@ -247,8 +247,7 @@ fn threads_mode_is_checked_and_changes_no_result() {
     let (ok, out) = run_deck(&format!("{BASE}run 1\n"), &["--threads-mode", "parallel"]);
     assert!(ok, "{out}");
     // The project's own 514-sphere packing (the Debian example's needs liggghts-doc).
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let data = root.join("validation/cases/uniaxial/packing_514.data");
+    let data = mcdem::validate::packing::shipped();
     let dir = tempfile::tempdir().unwrap();
     let decks = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs");
     let piston = |mode: &str| {

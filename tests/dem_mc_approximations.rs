@@ -8,11 +8,6 @@ use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
 
-/// The project's own 514-sphere packing (the Debian example's needs liggghts-doc).
-fn packing() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("validation/cases/uniaxial/packing_514.data")
-}
-
 fn decks() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs")
 }
@@ -30,7 +25,7 @@ fn piston_force(dir: &Path, options: &[&str]) -> (Vec<f64>, String) {
         ("every", "10".into()),
         ("out", out.display().to_string()),
         ("dir", decks().display().to_string()),
-        ("data", packing().display().to_string()),
+        ("data", mcdem::validate::packing::shipped().display().to_string()),
     ] {
         cmd.arg("-var").arg(k).arg(v);
     }

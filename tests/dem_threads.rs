@@ -9,11 +9,6 @@ use std::path::{Path, PathBuf};
 use mcdem::deck::{run_file, Options};
 use mcdem::engine::PairThreads;
 
-/// The project's own 514-sphere packing (the Debian example's needs liggghts-doc).
-fn packing() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("validation/cases/uniaxial/packing_514.data")
-}
-
 fn decks() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs")
 }
@@ -29,7 +24,7 @@ fn piston_force(dir: &Path, law: &str, geomtol: &str, threads: PairThreads, pool
         ("every", "10".into()),
         ("out", out.display().to_string()),
         ("dir", decks().display().to_string()),
-        ("data", packing().display().to_string()),
+        ("data", mcdem::validate::packing::shipped().display().to_string()),
     ];
     let opts = Options {
         vars: vars.iter().map(|(k, v)| (k.to_string(), v.clone())).collect(),

@@ -461,7 +461,6 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
         name: die.case,
         title: die.title.into(),
         passed: ok,
-        skipped: None,
         targets,
         rows,
         models,

@@ -427,7 +427,6 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         name: "hard_cases",
         title: "numerical stability on hard cases (SPEC §6)".into(),
         passed: outcomes.iter().all(|o| o.ok),
-        skipped: None,
         targets: Vec::new(),
         rows,
         models: Vec::new(),

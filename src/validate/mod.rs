@@ -56,10 +56,6 @@ pub struct CaseResult {
     /// Every check of the case held (correctness: analytic limits, cross-engine agreement, the
     /// reference table). A failed check makes `mcdem validate` exit non-zero.
     pub passed: bool,
-    /// Why the case did not run (an input it needs is missing): reported as skipped, never as
-    /// passed.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub skipped: Option<String>,
     /// Agreement targets with the paper's claims: reported met or not, never tuned to pass; a
     /// missed target is a finding, not a failure of the code.
     #[serde(default)]
@@ -74,12 +70,12 @@ pub struct CaseResult {
 }
 
 impl CaseResult {
-    /// `passed`, `FAILED` or `skipped: <reason>`, as the console and the report print it.
-    pub fn status(&self) -> String {
-        match &self.skipped {
-            Some(why) => format!("skipped: {why}"),
-            None if self.passed => "passed".into(),
-            None => "FAILED".into(),
+    /// `passed` or `FAILED`, as the console and the report print it.
+    pub fn status(&self) -> &'static str {
+        if self.passed {
+            "passed"
+        } else {
+            "FAILED"
         }
     }
 }
@@ -326,20 +322,4 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
     plot::draw_panels(&opts.out.join(file), &charts, 2)?;
     let _ = writeln!(table, "\n![speed against error, one panel per case]({file})");
     Ok(table)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::CaseResult;
-
-    /// A case that did not run reads "skipped: why", whatever its `passed` flag says.
-    #[test]
-    fn a_skipped_case_is_never_reported_as_passed() {
-        let mut r = CaseResult { passed: true, skipped: Some("needs X".into()), ..Default::default() };
-        assert_eq!(r.status(), "skipped: needs X");
-        r.skipped = None;
-        assert_eq!(r.status(), "passed");
-        r.passed = false;
-        assert_eq!(r.status(), "FAILED");
-    }
 }

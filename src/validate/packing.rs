@@ -31,8 +31,11 @@ const Z_TOP: f64 = 0.40;
 /// Particle density of the hydrogel decks [kg/m³].
 const DENSITY: f64 = 11.5;
 
-/// The committed packing (`validation/cases/uniaxial/packing_514.data`), built into the binary.
-pub const SHIPPED: &str = include_str!("../../validation/cases/uniaxial/packing_514.data");
+/// The committed packing, `validation/cases/uniaxial/packing_514.data` (read where the decks of
+/// `liggghts_inputs/` are read from: this tree).
+pub fn shipped() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("validation/cases/uniaxial/packing_514.data")
+}
 
 /// Diameters and centres of the loose random packing for `seed`.
 pub fn loose(seed: u64) -> Result<Vec<(f64, Vec3)>, String> {

@@ -33,7 +33,6 @@ pub fn run(_opts: &Options) -> Result<CaseResult, String> {
         name: "physics_checks",
         title: "contact core vs analytic limits".into(),
         passed: checks.iter().all(|c| c.passed),
-        skipped: None,
         targets: Vec::new(),
         rows,
         models: Vec::new(),

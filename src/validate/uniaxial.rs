@@ -8,7 +8,7 @@
 //! (below, the loose packing carries almost no load and the relative error is meaningless).
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -24,21 +24,6 @@ const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_publi
 /// case use the project's own packing even where liggghts-doc is installed).
 pub const EXAMPLE_ENV: &str = "MCDEM_HYDROGEL_EXAMPLE";
 
-/// The packing the case starts from: the Debian example's where it is installed, else the
-/// project's own (`validation/cases/uniaxial/`, written into `dir`). Returns its data file and a
-/// phrase naming it for the report.
-pub fn packing(dir: &Path) -> Result<(std::path::PathBuf, &'static str), String> {
-    let example = std::env::var(EXAMPLE_ENV).unwrap_or_else(|_| EXAMPLE.to_string());
-    let debian = Path::new(&example).join("data/input.data");
-    if debian.is_file() {
-        return Ok((debian, "the Debian example's packing (liggghts-doc)"));
-    }
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let own = dir.join("packing_514.data");
-    std::fs::write(&own, super::packing::SHIPPED)
-        .map_err(|e| format!("cannot write {}: {e}", own.display()))?;
-    Ok((own, "mcdem's own packing (validation/cases/uniaxial/packing_514.data; liggghts-doc absent)"))
-}
 /// Box, solid volume and piston start of the example (SPEC §5 item 2), shared with the solver.
 use crate::nonlocal::uniaxial::{
     HYDROGEL_LX as LX, HYDROGEL_LY as LY, HYDROGEL_SOLID_VOLUME as SOLID_VOLUME, HYDROGEL_Z_PHI,
@@ -120,6 +105,22 @@ pub fn setup(quick: bool) -> Setup {
             nonlocal_steps: 60,
             kernel: KernelKind::Sphere,
         }
+    }
+}
+
+/// The packing the case starts from: the Debian example's where it is installed, else the
+/// project's own ([`super::packing::shipped`]). Returns its data file and a phrase naming it for
+/// the report.
+pub fn packing() -> (PathBuf, &'static str) {
+    let example = std::env::var(EXAMPLE_ENV).unwrap_or_else(|_| EXAMPLE.to_string());
+    let debian = Path::new(&example).join("data/input.data");
+    if debian.is_file() {
+        (debian, "the Debian example's packing (liggghts-doc)")
+    } else {
+        (
+            super::packing::shipped(),
+            "mcdem's own packing (validation/cases/uniaxial/packing_514.data; liggghts-doc absent)",
+        )
     }
 }
 
@@ -212,7 +213,7 @@ pub fn start_state(
 ) -> Result<(std::path::PathBuf, std::path::PathBuf), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let dump = dir.join("state.dump");
-    let (start, _) = packing(dir)?;
+    let (start, _) = packing();
     let mut vars = deck_vars(Law::HERTZ, nu, s, 2);
     vars.push(("data", start.display().to_string()));
     vars.push(("statestroke", "2".into()));
@@ -220,31 +221,15 @@ pub fn start_state(
     runner::run_rust("hydrogel.in", &vars)?;
     let frames = crate::outputs::read_dump(&dump)?;
     let f = frames.last().ok_or_else(|| format!("{}: no frame", dump.display()))?;
-    let col = |n: &str| f.column(n).ok_or_else(|| format!("{}: no column {n}", dump.display()));
-    let (ci, ct, cr) = (col("id")?, col("type")?, col("radius")?);
-    let (cx, cy, cz) = (col("x")?, col("y")?, col("z")?);
-    let (cvx, cvy, cvz) = (col("vx")?, col("vy")?, col("vz")?);
-    let mut text = format!(
-        "LIGGGHTS data file: hydrogel packing at the start of the second compression (Hertz, nu = {nu})\n\n\
-         {} atoms\n\n2 atom types\n\n-0.0101 0.1701 xlo xhi\n-0.0101 0.1701 ylo yhi\n-0.0101 0.4101 zlo zhi\n\nAtoms\n\n",
-        f.rows.len()
+    // The data file names one atom type, the hydrogel's (the box walls are type 2).
+    if f.column("type").is_some_and(|ct| f.rows.iter().any(|r| r[ct] != 1.0)) {
+        return Err(format!("{}: particles of a type other than 1", dump.display()));
+    }
+    let (spheres, v) = super::packing::from_frame(f, &dump)?;
+    let title = format!(
+        "LIGGGHTS data file: hydrogel packing at the start of the second compression (Hertz, nu = {nu})"
     );
-    for r in &f.rows {
-        let _ = writeln!(
-            text,
-            "{} {} {:.12e} 11.5 {:.12e} {:.12e} {:.12e}",
-            r[ci],
-            r[ct],
-            2.0 * r[cr],
-            r[cx],
-            r[cy],
-            r[cz]
-        );
-    }
-    text.push_str("\nVelocities\n\n");
-    for r in &f.rows {
-        let _ = writeln!(text, "{} {:.12e} {:.12e} {:.12e} 0 0 0", r[ci], r[cvx], r[cvy], r[cvz]);
-    }
+    let text = super::packing::data_file(&title, &spheres, Some(&v));
     let data = dir.join("state.data");
     std::fs::write(&data, text).map_err(|e| format!("cannot write {}: {e}", data.display()))?;
     Ok((dump, data))
@@ -321,7 +306,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
     let kind = s.kernel;
     let scratch = runner::Scratch::new()?;
     let scratch = &scratch.0;
-    let (_, which) = packing(scratch)?;
+    let (_, which) = packing();
     eprintln!("validate: uniaxial starts from {which}");
     let n = stroke_steps(s.stroke);
     let mut rows = Vec::new();
@@ -538,7 +523,6 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         // Checks: every run finished with finite curves and the reference converged (a failure
         // stops the case with its message).
         passed: true,
-        skipped: None,
         targets,
         rows,
         models,
