@@ -1765,7 +1765,8 @@ impl Deck {
                 d.write(&mut self.world, &self.pair_locals)?;
             }
         }
-        if !self.vtk_dumps.is_empty() {
+        let vtk_due = |d: &vtk::VtkDump| step % d.every == 0 && d.last != Some(step);
+        if self.vtk_dumps.iter().any(vtk_due) {
             // Meshes under a `fix move/mesh` carry a velocity LIGGGHTS writes; others have none.
             let mut moving = vec![false; self.world.meshes.len()];
             for (_, k) in &self.fixes {
@@ -1773,10 +1774,8 @@ impl Deck {
                     moving[*m] = true;
                 }
             }
-            for d in &mut self.vtk_dumps {
-                if step % d.every == 0 && d.last != Some(step) {
-                    d.write(&self.world, &moving)?;
-                }
+            for d in self.vtk_dumps.iter_mut().filter(|d| vtk_due(d)) {
+                d.write(&self.world, &moving)?;
             }
         }
         Ok(())
