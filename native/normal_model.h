@@ -149,7 +149,7 @@ public:
     const mcdem_pair_coeffs &pair_coeffs(int it, int jt) const { return coeffs_[it][jt]; }
 
     // i's multi-contact-modified radius at this contact. LIGGGHTS's pair loop grows radj and the
-    // radius sum but leaves radi at the original radius (its walls grow radi). SPEC §2 uses the
+    // radius sum but leaves radi at the original radius (its walls grow radi). docs/spec.md §2 uses the
     // modified radius of both partners for R_eff, the lever arms and the contact point, so that a
     // pair does not depend on which partner the neighbour list names first.
     static double modified_radius_i(const SurfacesCloseData &d) { return d.is_wall ? d.radi : d.radsum - d.radj; }
