@@ -3,7 +3,8 @@
 //! 1. regenerates the `style_*.h` X-macro headers that LIGGGHTS's `contact_models.h` includes (the
 //!    Debian package does not ship them) from the installed model headers, keeping the library's ids;
 //! 2. picks an unused normal-model id for `mc_advanced`;
-//! 3. compiles the C++ shim in `native/` with the MPI compiler flags and links LIGGGHTS and MPI;
+//! 3. compiles the C++ shim in `native/` (every `*.cpp`, one static library) with the MPI compiler
+//!    flags and links LIGGGHTS and MPI;
 //! 4. generates Rust bindings to LIGGGHTS's `library.h`.
 
 fn main() {
@@ -85,6 +86,25 @@ mod liggghts {
         normal_ids
     }
 
+    /// The files of `native/`, sorted (the C ABI header and the shim's headers and sources).
+    fn native_files() -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = fs::read_dir("native")
+            .expect("read native/")
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file())
+            .collect();
+        files.sort();
+        files
+    }
+
+    /// The shim's translation units: every `native/*.cpp` (native/shim.h says which does what).
+    fn shim_sources() -> Vec<PathBuf> {
+        let sources: Vec<PathBuf> =
+            native_files().into_iter().filter(|p| p.extension().is_some_and(|x| x == "cpp")).collect();
+        assert!(!sources.is_empty(), "no native/*.cpp: the LIGGGHTS shim is missing");
+        sources
+    }
+
     pub fn build() {
         let inc = include_dir();
         let out = PathBuf::from(env::var_os("OUT_DIR").unwrap());
@@ -95,9 +115,10 @@ mod liggghts {
         let id = (20..64).find(|i| !used.contains(i)).expect("no free normal-model id below 64");
 
         let compile = mpi_flags("compile");
+        let sources = shim_sources();
         let mut cc = cc::Build::new();
         cc.cpp(true)
-            .file("native/mcdem_liggghts.cpp")
+            .files(&sources)
             .include(&styles)
             .include(&inc)
             .include("native")
@@ -122,8 +143,11 @@ mod liggghts {
             }
         }
         println!("cargo:rustc-env=MCDEM_MC_ADVANCED_ID={id}");
-        println!("cargo:rerun-if-changed=native/mcdem_liggghts.cpp");
-        println!("cargo:rerun-if-changed=native/mcdem.h");
+        // The directory (a file added or removed) and each file in it.
+        println!("cargo:rerun-if-changed=native");
+        for f in native_files() {
+            println!("cargo:rerun-if-changed={}", f.display());
+        }
 
         let mut bg = bindgen::Builder::default()
             .header(inc.join("library.h").to_string_lossy())

@@ -17,17 +17,27 @@ extern "C" {
     fn mcdem_liggghts_main(argc: c_int, argv: *mut *mut c_char) -> c_int;
 }
 
-/// The C ABI functions the shim calls. The shim is linked after this crate's objects, so a
-/// reference from Rust keeps them in the executable whatever order the linker visits archives in.
+/// Every C ABI function (`src/ffi.rs`) the shim in `native/` calls. The shim is a static library
+/// that the linker reads after this crate's objects, and an archive member is only taken in for a
+/// symbol that is still undefined when the linker reaches it: a function no Rust code refers to
+/// could be left out, and the shim's call to it would not link. A reference from Rust keeps every
+/// one of them in the executable whatever order the linker visits archives in. Keep this list
+/// equal to the `mcdem_*` calls in `native/*.cpp` and `native/*.h`.
 fn keep_abi_symbols() {
     use crate::ffi::*;
-    let table: [*const c_void; 6] = [
+    let table: [*const c_void; 12] = [
         mcdem_validate_mc_params as *const c_void,
-        mcdem_radius_changes as *const c_void,
         mcdem_pair_coeffs_new as *const c_void,
+        mcdem_check_overlap as *const c_void,
         mcdem_hertz_normal as *const c_void,
+        mcdem_particle_particle as *const c_void,
+        mcdem_pair_batch_size as *const c_void,
+        mcdem_pair_batch_evaluate as *const c_void,
+        mcdem_radius_changes as *const c_void,
+        mcdem_radius_changes_cached as *const c_void,
+        mcdem_influence_cache_new as *const c_void,
+        mcdem_influence_cache_free as *const c_void,
         mcdem_last_error as *const c_void,
-        mcdem_version as *const c_void,
     ];
     std::hint::black_box(table);
 }

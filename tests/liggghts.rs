@@ -88,7 +88,7 @@ fn mpr_zero_is_stock_hertz_two_particles_and_plate() {
     assert!(d <= PRINT_PRECISION, "max relative difference {d:e}");
 }
 
-/// The plugin evaluates pairs in its own loop (native/mcdem_liggghts.cpp, `mc_pair_loop`): what the
+/// The plugin evaluates pairs in its own loop (native/pair_loop.cpp, `mc_pair_loop`): what the
 /// library's loop hands to its outputs must come out the same. With MPR = 0, `compute
 /// pair/gran/local` (dump local: positions, IDs, force, contact area, overlap of every contact) and
 /// `compute stress/atom` (the virial tallied per pair) equal stock Hertz's to print precision.
