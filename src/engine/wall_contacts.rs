@@ -9,7 +9,8 @@
 //! coplanar neighbours), instead of restarting from zero on the second triangle.
 
 use super::mesh::{Feature, Mesh};
-use super::{WallCandidate, WallContact, WallFix, WallGeom};
+use super::contacts::{WallCandidate, WallContact};
+use super::{WallFix, WallGeom};
 use crate::physics::Vec3;
 
 /// Per contact of the particle and mesh being collected: where on its triangle its point lies and
