@@ -6,6 +6,26 @@ use crate::physics::Vec3;
 
 use super::StepError;
 
+/// Contact records of the step: candidate pairs with their history and per-step
+/// transients, and wall contacts with their forces.
+#[derive(Debug, Default)]
+pub(super) struct Contacts {
+    pub(super) pairs: Vec<Pair>,
+    pub(super) pairs_old: Vec<Pair>,
+    /// Per pair, under the multi-contact closure: what its next pass reads (empty under Hertz).
+    pub(super) pair_hist: Vec<PairHist>,
+    pub(super) pair_hist_old: Vec<PairHist>,
+    pub(super) wc: Vec<WallContact>,
+    pub(super) wc_old: Vec<WallContact>,
+    /// Per pair, under the multi-contact closure: this step's radius changes (a Hertz pass reads none).
+    pub(super) pair_dr: Vec<PairDr>,
+    /// Per pair: the total contact force on i from j at the last force pass (zero when apart),
+    /// for the stress and coordination outputs.
+    pub(super) pair_force: Vec<Vec3>,
+    /// Per wall contact: its force on the particle at the last force pass (for the mesh sums).
+    pub(super) wall_force: Vec<Vec3>,
+}
+
 /// Candidate pair with its tangential history ξ: what every step reads and writes per pair, 32
 /// bytes, two to a cache line. What only the multi-contact closure needs lives beside it in
 /// [`PairHist`], and per-step transients (this step's radius changes, the recorded force) in their
@@ -115,7 +135,6 @@ impl WallContact {
         (self.p, self.wall, self.mesh, self.tri)
     }
 }
-
 
 /// Relative gap (fraction of r_i + r_j) within which an unloaded pair still receives a
 /// multi-contact radius change: growth beyond 10 % of both radii together is outside the

@@ -9,6 +9,25 @@ use super::particles::INERTIA;
 use super::{StepError, World};
 
 impl World {
+    /// The boundaries' part of the drift: the Lees–Edwards offset and the meshes of `fix
+    /// move/mesh` advance by one step, and the neighbour and wall-candidate checks learn how far.
+    pub(super) fn move_boundaries(&mut self) {
+        let dt = self.dt;
+        if let Some(d) = self.domain.as_mut() {
+            d.advance_shear(dt);
+            self.lists.le_travel += d.le_vjump * dt;
+        }
+        let mut travel: f64 = 0.0;
+        for m in &mut self.meshes {
+            if m.velocity != Vec3::zeros() {
+                let d = m.velocity * dt;
+                m.translate(&d);
+                travel = travel.max(d.norm());
+            }
+        }
+        self.wall_search.wall_travel += travel;
+    }
+
     /// First half of velocity Verlet: half-kick, drift, rotational half-kick. On the team's
     /// threads each member moves its own range of particles (the range it will also finish and,
     /// roughly, the particles of its pair block): a particle's state then stays in one core's
@@ -28,7 +47,7 @@ impl World {
                 *omega += dtirot * torque[i];
             }
         };
-        match self.team.as_ref().filter(|_| self.parallel) {
+        match self.blocks.team.as_ref().filter(|_| self.blocks.parallel) {
             Some(team) => {
                 let (xs, vs, os) =
                     (SplitMut::new(&mut p.x), SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
@@ -67,7 +86,7 @@ impl World {
             }
             Ok(())
         };
-        match self.team.as_ref().filter(|_| self.parallel) {
+        match self.blocks.team.as_ref().filter(|_| self.blocks.parallel) {
             Some(team) => {
                 let (vs, os) = (SplitMut::new(&mut p.v), SplitMut::new(&mut p.omega));
                 team.run_shares(n, |_, r| {

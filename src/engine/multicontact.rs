@@ -6,7 +6,7 @@ use std::cell::RefCell;
 use std::sync::Mutex;
 
 use crate::physics::contact_set::{
-    loaded_threshold, radius_changes, ContactLoad, KeptInfluence, McParams,
+    loaded_threshold, radius_changes, ContactLoad, InfluenceCache, KeptInfluence, McParams,
 };
 use crate::physics::Material;
 use crate::team::{SplitMut, Team};
@@ -14,6 +14,29 @@ use crate::team::{SplitMut, Team};
 use super::contacts::{PairHist, PairLoad, WallContact};
 use super::particles::Particles;
 use super::{StepError, World};
+
+/// What the multi-contact pass keeps between steps (no allocation in the loop).
+#[derive(Debug, Default)]
+pub(super) struct McState {
+    /// Step of the next full multi-contact pass under `mc_every`.
+    pub(super) mc_due: u64,
+    /// Neighbour builds at the last full multi-contact pass (a build renumbers the pairs).
+    pub(super) mc_builds: u64,
+    pub(super) mc_types: Vec<McType>,
+    pub(super) slot_start: Vec<u32>,
+    pub(super) slots: Vec<Slot>,
+    pub(super) slot_fill: Vec<u32>,
+    /// Radius change per slot, from this step's kernel pass.
+    pub(super) slot_dr: Vec<f64>,
+    /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
+    /// contact appeared or left, a pair entered or left the multi-contact set).
+    pub(super) slots_stale: bool,
+    /// Per pair: what this step's multi-contact pass reads (filled for pairs taking part).
+    pub(super) pair_loads: Vec<PairLoad>,
+    /// Geometry tolerance: the kept influence matrices, one per particle.
+    pub(super) mc_cache: Option<InfluenceCache>,
+    pub(super) pair_mc: Vec<bool>,
+}
 
 /// Per-type MC kernel parameters without the radius (filled in per particle).
 #[derive(Debug, Clone, Copy)]
@@ -45,39 +68,39 @@ impl World {
     /// contacts), as compressed rows. Rebuilt only when the pairs or wall contacts changed.
     pub(super) fn build_slots(&mut self) {
         let n = self.p.len();
-        self.slot_start.clear();
-        self.slot_start.resize(n + 1, 0);
-        for (pr, _) in self.pairs.iter().zip(&self.pair_mc).filter(|(_, m)| **m) {
-            self.slot_start[pr.i as usize + 1] += 1;
-            self.slot_start[pr.j as usize + 1] += 1;
+        self.multi.slot_start.clear();
+        self.multi.slot_start.resize(n + 1, 0);
+        for (pr, _) in self.contacts.pairs.iter().zip(&self.multi.pair_mc).filter(|(_, m)| **m) {
+            self.multi.slot_start[pr.i as usize + 1] += 1;
+            self.multi.slot_start[pr.j as usize + 1] += 1;
         }
-        for c in &self.wc {
-            self.slot_start[c.p as usize + 1] += 1;
+        for c in &self.contacts.wc {
+            self.multi.slot_start[c.p as usize + 1] += 1;
         }
         for i in 0..n {
-            self.slot_start[i + 1] += self.slot_start[i];
+            self.multi.slot_start[i + 1] += self.multi.slot_start[i];
         }
-        let total = self.slot_start[n] as usize;
-        self.slots.clear();
-        self.slots.resize(total, Slot::Wall(0));
-        self.slot_fill.clear();
-        self.slot_fill.extend_from_slice(&self.slot_start[..n]);
-        for (k, pr) in self.pairs.iter().enumerate() {
-            if !self.pair_mc[k] {
+        let total = self.multi.slot_start[n] as usize;
+        self.multi.slots.clear();
+        self.multi.slots.resize(total, Slot::Wall(0));
+        self.multi.slot_fill.clear();
+        self.multi.slot_fill.extend_from_slice(&self.multi.slot_start[..n]);
+        for (k, pr) in self.contacts.pairs.iter().enumerate() {
+            if !self.multi.pair_mc[k] {
                 continue;
             }
             let (i, j) = (pr.i as usize, pr.j as usize);
-            self.slots[self.slot_fill[i] as usize] = Slot::PairI(k as u32);
-            self.slot_fill[i] += 1;
-            self.slots[self.slot_fill[j] as usize] = Slot::PairJ(k as u32);
-            self.slot_fill[j] += 1;
+            self.multi.slots[self.multi.slot_fill[i] as usize] = Slot::PairI(k as u32);
+            self.multi.slot_fill[i] += 1;
+            self.multi.slots[self.multi.slot_fill[j] as usize] = Slot::PairJ(k as u32);
+            self.multi.slot_fill[j] += 1;
         }
-        for (k, c) in self.wc.iter().enumerate() {
+        for (k, c) in self.contacts.wc.iter().enumerate() {
             let i = c.p as usize;
-            self.slots[self.slot_fill[i] as usize] = Slot::Wall(k as u32);
-            self.slot_fill[i] += 1;
+            self.multi.slots[self.multi.slot_fill[i] as usize] = Slot::Wall(k as u32);
+            self.multi.slot_fill[i] += 1;
         }
-        self.slots_stale = false;
+        self.multi.slots_stale = false;
     }
 
     /// Multi-contact pass (LIGGGHTS `fix multicontact/halfspace` pre_force): radius change of
@@ -87,35 +110,35 @@ impl World {
         // theirs by index (valid until the next neighbour build) and wall contacts by key
         // (`wall_contacts::collect`).
         if self.mc_every > 1
-            && self.step < self.mc_due
-            && self.builds == self.mc_builds
-            && self.pair_dr.len() == self.pairs.len()
+            && self.step < self.multi.mc_due
+            && self.builds == self.multi.mc_builds
+            && self.contacts.pair_dr.len() == self.contacts.pairs.len()
         {
             return Ok(());
         }
-        self.mc_due = self.step.saturating_add(self.mc_every.max(1));
-        self.mc_builds = self.builds;
+        self.multi.mc_due = self.step.saturating_add(self.mc_every.max(1));
+        self.multi.mc_builds = self.builds;
         self.mc_updates += 1;
         let n = self.p.len();
         let domain = self.domain.expect("domain checked in setup");
-        for c in &mut self.wc {
+        for c in &mut self.contacts.wc {
             c.dr = 0.0;
         }
-        if self.pair_mc.len() != self.pairs.len() {
-            self.pair_mc.clear();
-            self.pair_mc.resize(self.pairs.len(), false);
-            self.slots_stale = true;
+        if self.multi.pair_mc.len() != self.contacts.pairs.len() {
+            self.multi.pair_mc.clear();
+            self.multi.pair_mc.resize(self.contacts.pairs.len(), false);
+            self.multi.slots_stale = true;
         }
-        if self.pair_hist.len() != self.pairs.len() {
+        if self.contacts.pair_hist.len() != self.contacts.pairs.len() {
             // The closure started since the last neighbour build: every pair is new to it.
-            self.pair_hist.clear();
-            self.pair_hist.resize(self.pairs.len(), PairHist::NEW);
+            self.contacts.pair_hist.clear();
+            self.contacts.pair_hist.resize(self.contacts.pairs.len(), PairHist::NEW);
         }
-        self.pair_loads.resize(self.pairs.len(), PairLoad::default());
+        self.multi.pair_loads.resize(self.contacts.pairs.len(), PairLoad::default());
         // Pairs outside the multi-contact set get no slot, hence no change.
-        self.pair_dr.clear();
-        self.pair_dr.resize(self.pairs.len(), [0.0; 2]);
-        let (p, types) = (&self.p, &self.mc_types);
+        self.contacts.pair_dr.clear();
+        self.contacts.pair_dr.resize(self.contacts.pairs.len(), [0.0; 2]);
+        let (p, types) = (&self.p, &self.multi.mc_types);
         // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
         let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
         // One pass over the pairs (at large N they no longer fit in cache): reset the radius
@@ -128,8 +151,9 @@ impl World {
         // spheres' surfaces along the centre line when loaded, else each particle's own surface
         // point.
         let mut stale = false;
-        let taking_part = self.pair_mc.iter_mut().zip(self.pair_loads.iter_mut());
-        for ((pr, h), (m, load)) in self.pairs.iter().zip(&self.pair_hist).zip(taking_part) {
+        let taking_part = self.multi.pair_mc.iter_mut().zip(self.multi.pair_loads.iter_mut());
+        for ((pr, h), (m, load)) in self.contacts.pairs.iter().zip(&self.contacts.pair_hist).zip(taking_part)
+        {
             let now = h.fn_prev > 0.0 || h.near;
             if *m != now {
                 *m = now;
@@ -150,43 +174,43 @@ impl World {
             };
             load.force = h.fn_prev;
         }
-        if stale || self.slots_stale {
+        if stale || self.multi.slots_stale {
             self.build_slots();
         }
         // The kernel particle by particle into one Δ per slot (threads on disjoint particle
         // ranges when they pay), then Δ to the pairs and wall contacts.
-        self.slot_dr.resize(self.slots.len(), 0.0);
+        self.multi.slot_dr.resize(self.multi.slots.len(), 0.0);
         let threaded = n >= 2 * MC_GRAIN && self.threads().is_some();
         let ctx = McCtx {
             p: &self.p,
-            mc_types: &self.mc_types,
-            slot_start: &self.slot_start,
-            slots: &self.slots,
-            pair_loads: &self.pair_loads,
-            wc: &self.wc,
+            mc_types: &self.multi.mc_types,
+            slot_start: &self.multi.slot_start,
+            slots: &self.multi.slots,
+            pair_loads: &self.multi.pair_loads,
+            wc: &self.contacts.wc,
             step: self.step,
         };
-        let (tolerance, kept) = match self.mc_cache.as_mut() {
+        let (tolerance, kept) = match self.multi.mc_cache.as_mut() {
             Some(c) => {
                 let (t, k) = c.slots_mut(n);
                 (t, Some(k))
             }
             None => (0.0, None),
         };
-        let counts = match self.team.as_ref().filter(|_| threaded) {
-            Some(team) => ctx.kernel_on(team, &mut self.slot_dr, kept, tolerance)?,
-            None => ctx.kernel(0, n, &mut self.slot_dr, kept, tolerance)?,
+        let counts = match self.blocks.team.as_ref().filter(|_| threaded) {
+            Some(team) => ctx.kernel_on(team, &mut self.multi.slot_dr, kept, tolerance)?,
+            None => ctx.kernel(0, n, &mut self.multi.slot_dr, kept, tolerance)?,
         };
         self.mc_kernel_contacts += counts.contacts;
         self.mc_kernel_fallbacks += counts.fallbacks;
-        if let Some(c) = self.mc_cache.as_mut() {
+        if let Some(c) = self.multi.mc_cache.as_mut() {
             c.recomputed += counts.recomputed;
         }
-        for (s, &d) in self.slots.iter().zip(&self.slot_dr) {
+        for (s, &d) in self.multi.slots.iter().zip(&self.multi.slot_dr) {
             match *s {
-                Slot::PairI(k) => self.pair_dr[k as usize][0] = d,
-                Slot::PairJ(k) => self.pair_dr[k as usize][1] = d,
-                Slot::Wall(k) => self.wc[k as usize].dr = d,
+                Slot::PairI(k) => self.contacts.pair_dr[k as usize][0] = d,
+                Slot::PairJ(k) => self.contacts.pair_dr[k as usize][1] = d,
+                Slot::Wall(k) => self.contacts.wc[k as usize].dr = d,
             }
         }
         Ok(())

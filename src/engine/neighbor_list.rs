@@ -4,7 +4,23 @@
 use crate::physics::Vec3;
 
 use super::contacts::{Pair, PairHist, RECEIVER_GAP};
+use super::neighbor::CellList;
 use super::{Closure, Domain, StepError, World};
+
+/// The neighbour stage's state: cell list, candidates, and what the skin test compares with.
+#[derive(Debug, Default)]
+pub(super) struct NeighborList {
+    pub(super) next_sort: u64,
+
+    pub(super) cells: CellList,
+    pub(super) cand: Vec<(u32, u32)>,
+    pub(super) x_build: Vec<Vec3>,
+    pub(super) need_build: bool,
+    /// Lees–Edwards offset travelled since the last neighbour build (not wrapped) [m].
+    pub(super) le_travel: f64,
+    /// Interaction cutoff without skin, 2 r_max × pair_reach, at the last build [m].
+    pub(super) cut_build: f64,
+}
 
 impl World {
     /// Rebuilds the neighbour list when a pair could have closed the skin since the last build
@@ -18,21 +34,24 @@ impl World {
     /// interval no longer shrinks with the box size: the lab displacement of particles near the
     /// boundary grows with L_y, the relative motion of neighbours does not.
     pub(super) fn neighbor_check(&mut self) -> Result<(), StepError> {
-        if !self.need_build {
+        if !self.lists.need_build {
             let Some(domain) = self.domain else { return Ok(()) };
             // Lees–Edwards strain since the build (0 without shear).
-            let strain =
-                if self.le_travel == 0.0 { 0.0 } else { self.le_travel / (domain.hi.y - domain.lo.y) };
+            let strain = if self.lists.le_travel == 0.0 {
+                0.0
+            } else {
+                self.lists.le_travel / (domain.hi.y - domain.lo.y)
+            };
             let moved = if strain == 0.0 {
                 let lim = 0.25 * self.skin * self.skin;
-                self.p.x.iter().zip(&self.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim)
+                self.p.x.iter().zip(&self.lists.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim)
             } else {
                 let ymid = 0.5 * (domain.lo.y + domain.hi.y);
                 let m2 = self
                     .p
                     .x
                     .iter()
-                    .zip(&self.x_build)
+                    .zip(&self.lists.x_build)
                     .map(|(x, x0)| {
                         let mut d = x - x0;
                         d.x -= strain * (x0.y - ymid);
@@ -40,13 +59,13 @@ impl World {
                     })
                     .fold(0.0, f64::max);
                 let m = m2.sqrt();
-                2.0 * m + strain.abs() * (self.cut_build + 2.0 * m) > self.skin
+                2.0 * m + strain.abs() * (self.lists.cut_build + 2.0 * m) > self.skin
             };
             if !moved {
                 return Ok(());
             }
         }
-        self.need_build = false;
+        self.lists.need_build = false;
         self.builds += 1;
         let domain = self.domain.expect("domain checked in setup");
         // Periodic wrap and lost-particle check happen at rebuilds, as in LAMMPS. y first: a
@@ -91,39 +110,48 @@ impl World {
             }
         }
         // The pair cutoff without skin, read by the sort's bins and by the next rebuild test.
-        self.cut_build = 2.0 * self.p.radius.iter().copied().fold(0.0, f64::max) * self.pair_reach();
-        if self.sort_every > 0 && self.step >= self.next_sort {
+        self.lists.cut_build = 2.0 * self.p.radius.iter().copied().fold(0.0, f64::max) * self.pair_reach();
+        if self.sort_every > 0 && self.step >= self.lists.next_sort {
             self.sort_spatially(&domain);
-            self.next_sort = self.step + self.sort_every;
+            self.lists.next_sort = self.step + self.sort_every;
         }
-        self.cells.build(&domain, &self.p.x, &self.p.radius, self.skin, self.pair_reach(), &mut self.cand);
+        self.lists.cells.build(
+            &domain,
+            &self.p.x,
+            &self.p.radius,
+            self.skin,
+            self.pair_reach(),
+            &mut self.lists.cand,
+        );
         // Carry the history over: both lists are sorted by (i, j). The closure's state rides
         // along when it is kept (a closure that starts later finds every pair new).
-        std::mem::swap(&mut self.pairs, &mut self.pairs_old);
-        std::mem::swap(&mut self.pair_hist, &mut self.pair_hist_old);
-        self.pairs.clear();
-        self.pair_hist.clear();
+        std::mem::swap(&mut self.contacts.pairs, &mut self.contacts.pairs_old);
+        std::mem::swap(&mut self.contacts.pair_hist, &mut self.contacts.pair_hist_old);
+        self.contacts.pairs.clear();
+        self.contacts.pair_hist.clear();
         let keep_hist = self.closure == Some(Closure::MultiContact);
-        let old_hist = self.pair_hist_old.len() == self.pairs_old.len();
+        let old_hist = self.contacts.pair_hist_old.len() == self.contacts.pairs_old.len();
         let mut k = 0;
-        for &(i, j) in &self.cand {
-            while k < self.pairs_old.len() && (self.pairs_old[k].i, self.pairs_old[k].j) < (i, j) {
+        for &(i, j) in &self.lists.cand {
+            while k < self.contacts.pairs_old.len()
+                && (self.contacts.pairs_old[k].i, self.contacts.pairs_old[k].j) < (i, j)
+            {
                 k += 1;
             }
-            let old = self.pairs_old.get(k).filter(|o| o.i == i && o.j == j);
-            self.pairs.push(old.copied().unwrap_or(Pair { i, j, shear: Vec3::zeros() }));
+            let old = self.contacts.pairs_old.get(k).filter(|o| o.i == i && o.j == j);
+            self.contacts.pairs.push(old.copied().unwrap_or(Pair { i, j, shear: Vec3::zeros() }));
             if keep_hist {
-                let h = old.filter(|_| old_hist).map(|_| self.pair_hist_old[k]);
-                self.pair_hist.push(h.unwrap_or(PairHist::NEW));
+                let h = old.filter(|_| old_hist).map(|_| self.contacts.pair_hist_old[k]);
+                self.contacts.pair_hist.push(h.unwrap_or(PairHist::NEW));
             }
         }
-        self.slots_stale = true;
-        self.owner_key = None;
+        self.multi.slots_stale = true;
+        self.blocks.owner_key = None;
         // The incidence rows are built when the threaded pass first needs them.
-        self.inc.clear();
-        self.x_build.clear();
-        self.x_build.extend_from_slice(&self.p.x);
-        self.le_travel = 0.0;
+        self.blocks.inc.clear();
+        self.lists.x_build.clear();
+        self.lists.x_build.extend_from_slice(&self.p.x);
+        self.lists.le_travel = 0.0;
         Ok(())
     }
 
@@ -156,7 +184,7 @@ impl World {
         if n < 2 {
             return;
         }
-        let bin = 0.5 * (self.cut_build + self.skin);
+        let bin = 0.5 * (self.lists.cut_build + self.skin);
         let len = domain.hi - domain.lo;
         // Bins per axis; coarser bins only for absurdly large boxes (the key must fit 64 bits).
         let bins = |a: usize| ((len[a] / bin).ceil().clamp(1.0, (1u64 << 21) as f64)) as u64;
@@ -181,7 +209,7 @@ impl World {
             new_of_old[o as usize] = k as u32;
         }
         self.p.permute(&old_of_new);
-        for (k, pr) in self.pairs.iter_mut().enumerate() {
+        for (k, pr) in self.contacts.pairs.iter_mut().enumerate() {
             let (a, b) = (new_of_old[pr.i as usize], new_of_old[pr.j as usize]);
             if a < b {
                 (pr.i, pr.j) = (a, b);
@@ -190,29 +218,31 @@ impl World {
                 // displacement relative to j, so it changes sign; the radii trade places.
                 (pr.i, pr.j) = (b, a);
                 pr.shear = -pr.shear;
-                if let Some(h) = self.pair_hist.get_mut(k) {
+                if let Some(h) = self.contacts.pair_hist.get_mut(k) {
                     std::mem::swap(&mut h.ri_prev, &mut h.rj_prev);
                 }
             }
         }
-        if self.pair_hist.len() == self.pairs.len() {
+        if self.contacts.pair_hist.len() == self.contacts.pairs.len() {
             // One permutation for both lists.
-            let mut order: Vec<u32> = (0..self.pairs.len() as u32).collect();
-            order.sort_unstable_by_key(|&k| (self.pairs[k as usize].i, self.pairs[k as usize].j));
-            self.pairs = order.iter().map(|&k| self.pairs[k as usize]).collect();
-            self.pair_hist = order.iter().map(|&k| self.pair_hist[k as usize]).collect();
+            let mut order: Vec<u32> = (0..self.contacts.pairs.len() as u32).collect();
+            order.sort_unstable_by_key(|&k| {
+                (self.contacts.pairs[k as usize].i, self.contacts.pairs[k as usize].j)
+            });
+            self.contacts.pairs = order.iter().map(|&k| self.contacts.pairs[k as usize]).collect();
+            self.contacts.pair_hist = order.iter().map(|&k| self.contacts.pair_hist[k as usize]).collect();
         } else {
-            self.pair_hist.clear();
-            self.pairs.sort_unstable_by_key(|pr| (pr.i, pr.j));
+            self.contacts.pair_hist.clear();
+            self.contacts.pairs.sort_unstable_by_key(|pr| (pr.i, pr.j));
         }
-        for c in &mut self.wc {
+        for c in &mut self.contacts.wc {
             c.p = new_of_old[c.p as usize];
         }
-        self.wc.sort_unstable_by_key(|c| c.key());
-        if let Some(cache) = self.mc_cache.as_mut() {
+        self.contacts.wc.sort_unstable_by_key(|c| c.key());
+        if let Some(cache) = self.multi.mc_cache.as_mut() {
             cache.reorder(&old_of_new);
         }
-        self.slots_stale = true;
+        self.multi.slots_stale = true;
         self.sorts += 1;
     }
 }

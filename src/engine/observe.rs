@@ -14,7 +14,7 @@ impl World {
     /// per-face share of `Mesh::force`, for `dump mesh/vtk`'s stresses).
     pub fn mesh_face_forces(&self, mesh: usize) -> Vec<Vec3> {
         let mut f = vec![Vec3::zeros(); self.meshes[mesh].tris.len()];
-        for (c, wf) in self.wc.iter().zip(&self.wall_force) {
+        for (c, wf) in self.contacts.wc.iter().zip(&self.contacts.wall_force) {
             if c.mesh as usize == mesh && matches!(self.walls[c.wall as usize].geom, WallGeom::Meshes(_)) {
                 f[c.tri as usize] -= *wf;
             }
@@ -24,7 +24,7 @@ impl World {
 
     /// Kernel calls that (re)computed an influence matrix under the geometry tolerance.
     pub fn mc_influence_updates(&self) -> u64 {
-        self.mc_cache.as_ref().map_or(0, |c| c.recomputed)
+        self.multi.mc_cache.as_ref().map_or(0, |c| c.recomputed)
     }
 
     /// Translational kinetic energy ½ Σ m v² [J] (thermo `ke`).
@@ -51,7 +51,7 @@ impl World {
         };
         let mut e = 0.0;
         let nt = self.ntypes;
-        for pr in &self.pairs {
+        for pr in &self.contacts.pairs {
             let (i, j) = (pr.i as usize, pr.j as usize);
             let mut d = self.p.x[i] - self.p.x[j];
             domain.minimum_image(&mut d);
@@ -63,7 +63,7 @@ impl World {
                 e += 0.4 * crate::physics::hertz::hertz_force(c.e_star, reff, delta) * delta;
             }
         }
-        for c in &self.wc {
+        for c in &self.contacts.wc {
             let i = c.p as usize;
             let delta = self.p.radius[i] - (self.p.x[i] - c.point).norm();
             if delta > 0.0 {
@@ -87,7 +87,7 @@ impl World {
         let mut sk = [[0.0; 3]; 3];
         let Some(domain) = self.domain else { return (sc, sk) };
         let vol = domain.volume();
-        for (pr, force) in self.pairs.iter().zip(&self.pair_force) {
+        for (pr, force) in self.contacts.pairs.iter().zip(&self.contacts.pair_force) {
             if *force == Vec3::zeros() {
                 continue;
             }
@@ -120,30 +120,30 @@ impl World {
             self.step,
             self.liggghts_radii,
         );
-        let np = self.pairs.len();
+        let np = self.contacts.pairs.len();
         let mc = self.closure == Some(Closure::MultiContact)
-            && self.pair_hist.len() == np
-            && self.pair_dr.len() == np;
-        let closure = mc.then_some((&self.pair_dr[..], &mut self.pair_hist[..]));
+            && self.contacts.pair_hist.len() == np
+            && self.contacts.pair_dr.len() == np;
+        let closure = mc.then_some((&self.contacts.pair_dr[..], &mut self.contacts.pair_hist[..]));
         let mut touching = Touching { x: &self.p.x, domain, out: Vec::new() };
-        ctx.pass(&mut self.pairs, closure, false, &mut touching).map_err(|e| *e)?;
+        ctx.pass(&mut self.contacts.pairs, closure, false, &mut touching).map_err(|e| *e)?;
         Ok(touching.out)
     }
 
     /// Particle–particle contacts carrying a force at the last force pass (set-up pass included).
     pub fn pair_contacts(&self) -> usize {
-        self.pair_force.iter().filter(|f| **f != Vec3::zeros()).count()
+        self.contacts.pair_force.iter().filter(|f| **f != Vec3::zeros()).count()
     }
 
     /// Contacts carrying a normal force at the last force pass: (particle pairs, particle–wall).
     /// Under Hertz, which keeps no normal force per pair, the pairs carrying a force.
     pub fn contact_counts(&self) -> (usize, usize) {
-        let pp = if self.pair_hist.len() == self.pairs.len() {
-            self.pair_hist.iter().filter(|h| h.fn_prev > 0.0).count()
+        let pp = if self.contacts.pair_hist.len() == self.contacts.pairs.len() {
+            self.contacts.pair_hist.iter().filter(|h| h.fn_prev > 0.0).count()
         } else {
             self.pair_contacts()
         };
-        let pw = self.wc.iter().filter(|c| c.fn_prev > 0.0).count();
+        let pw = self.contacts.wc.iter().filter(|c| c.fn_prev > 0.0).count();
         (pp, pw)
     }
 }

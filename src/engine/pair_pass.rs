@@ -11,6 +11,14 @@ use super::pair_eval::{PairCtx, PairOut};
 use super::sinks::{Keep, OwnedSums, SharedSums, SumInto};
 use super::{StepError, World};
 
+/// Buffers of the pair pass, kept between steps (no allocation in the loop).
+#[derive(Debug, Default)]
+pub(super) struct PairScratch {
+    pub(super) pair_out: Vec<PairOut>,
+    pub(super) f_buf: Vec<Vec3>,
+    pub(super) t_buf: Vec<Vec3>,
+}
+
 /// How this step's pair pass runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum PairStrategy {
@@ -32,19 +40,20 @@ impl World {
     /// blocks' worth of pairs.
     fn pair_strategy(&mut self, threads: usize) -> PairStrategy {
         let n = self.p.len();
-        let blocks = threads.min(self.pairs.len() / MIN_BLOCK_PAIRS).min(MAX_PAIR_BLOCKS);
+        let blocks = threads.min(self.contacts.pairs.len() / MIN_BLOCK_PAIRS).min(MAX_PAIR_BLOCKS);
         let threaded = threads > 1 && blocks > 1;
-        if threaded && self.owner_key != Some((self.pairs.len(), blocks, n)) {
+        if threaded && self.blocks.owner_key != Some((self.contacts.pairs.len(), blocks, n)) {
             self.assign_owners(blocks);
         }
         if threaded
-            && !self.owned_blocks_pay
-            && (self.inc_start.len() != n + 1 || self.inc.len() != 2 * self.pairs.len())
+            && !self.blocks.owned_blocks_pay
+            && (self.blocks.inc_start.len() != n + 1
+                || self.blocks.inc.len() != 2 * self.contacts.pairs.len())
         {
             // After every neighbour build, and when particles were added since.
             self.build_incidence();
         }
-        match (threaded, self.owned_blocks_pay) {
+        match (threaded, self.blocks.owned_blocks_pay) {
             (false, _) => PairStrategy::Serial,
             (true, true) => PairStrategy::OwnedBlocks { blocks },
             (true, false) => PairStrategy::KeepAll,
@@ -63,16 +72,22 @@ impl World {
     /// Pair forces and torques into every particle's sums (from zero), each pair's force recorded
     /// for the outputs, and on a time step (`update`) the pairs' histories advanced. `mc`: the
     /// multi-contact closure is on (its radius changes are read, its state kept).
-    pub(super) fn pair_pass(&mut self, update: bool, mc: bool, threads: usize, batched: bool) -> Result<(), StepError> {
+    pub(super) fn pair_pass(
+        &mut self,
+        update: bool,
+        mc: bool,
+        threads: usize,
+        batched: bool,
+    ) -> Result<(), StepError> {
         let strategy = self.pair_strategy(threads);
-        let np = self.pairs.len();
+        let np = self.contacts.pairs.len();
         if !mc {
             // Hertz keeps no closure state: a closure that starts later finds every pair new.
-            self.pair_hist.clear();
+            self.contacts.pair_hist.clear();
         }
         // Every entry is overwritten below: only the length has to match (no per-step fill).
-        if self.pair_force.len() != np {
-            self.pair_force.resize(np, Vec3::zeros());
+        if self.contacts.pair_force.len() != np {
+            self.contacts.pair_force.resize(np, Vec3::zeros());
         }
         match strategy {
             PairStrategy::Serial => self.pairs_serial(update, mc, batched),
@@ -96,21 +111,27 @@ impl World {
         );
 
         // The threaded passes add in this order too: identical sums.
-        let (f, torque) = (&mut self.f_buf, &mut self.t_buf);
+        let (f, torque) = (&mut self.pair_scratch.f_buf, &mut self.pair_scratch.t_buf);
         f.clear();
         f.resize(n, Vec3::zeros());
         torque.clear();
         torque.resize(n, Vec3::zeros());
-        let mut sums = SumInto { f, torque, force: &mut self.pair_force };
-        let closure = mc.then_some((&self.pair_dr[..], &mut self.pair_hist[..]));
-        ctx.pass(&mut self.pairs, closure, batched, &mut sums).map_err(|e| *e)?;
-        std::mem::swap(&mut self.p.f, &mut self.f_buf);
-        std::mem::swap(&mut self.p.torque, &mut self.t_buf);
+        let mut sums = SumInto { f, torque, force: &mut self.contacts.pair_force };
+        let closure = mc.then_some((&self.contacts.pair_dr[..], &mut self.contacts.pair_hist[..]));
+        ctx.pass(&mut self.contacts.pairs, closure, batched, &mut sums).map_err(|e| *e)?;
+        std::mem::swap(&mut self.p.f, &mut self.pair_scratch.f_buf);
+        std::mem::swap(&mut self.p.torque, &mut self.pair_scratch.t_buf);
         Ok(())
     }
 
     /// [`PairStrategy::OwnedBlocks`] on the team: member b takes block b.
-    fn pairs_owned_blocks(&mut self, update: bool, mc: bool, batched: bool, blocks: usize) -> Result<(), StepError> {
+    fn pairs_owned_blocks(
+        &mut self,
+        update: bool,
+        mc: bool,
+        batched: bool,
+        blocks: usize,
+    ) -> Result<(), StepError> {
         let n = self.p.len();
         let ctx = PairCtx::new(
             &self.p,
@@ -123,9 +144,9 @@ impl World {
             self.liggghts_radii,
         );
 
-        self.threaded_passes.0 += 1;
-        let team = self.team.as_ref().expect("threads() started the team");
-        let (f, torque) = (&mut self.f_buf, &mut self.t_buf);
+        self.blocks.threaded_passes.0 += 1;
+        let team = self.blocks.team.as_ref().expect("threads() started the team");
+        let (f, torque) = (&mut self.pair_scratch.f_buf, &mut self.pair_scratch.t_buf);
         f.resize(n, Vec3::zeros());
         torque.resize(n, Vec3::zeros());
         {
@@ -139,14 +160,15 @@ impl World {
         }
         let sums = SharedSums { f: f.as_mut_ptr(), torque: torque.as_mut_ptr(), n };
         // Every list emptied first: a block without pairs (fewer runs than blocks) adds none.
-        self.deferred.iter_mut().for_each(Vec::clear);
+        self.blocks.deferred.iter_mut().for_each(Vec::clear);
         // Member b takes block b: its pairs, radius changes, recorded forces and deferrals,
         // and times itself for `balance_blocks`.
-        let (owner, cuts) = (&self.owner, &self.pair_cuts);
-        let (pairs, forces) = (SplitMut::new(&mut self.pairs), SplitMut::new(&mut self.pair_force));
-        let deferred = SplitMut::new(&mut self.deferred[..blocks]);
-        let block_ns = SplitMut::new(&mut self.block_ns[..blocks]);
-        let (drs, hists) = (&self.pair_dr, SplitMut::new(&mut self.pair_hist));
+        let (owner, cuts) = (&self.blocks.owner, &self.blocks.pair_cuts);
+        let (pairs, forces) =
+            (SplitMut::new(&mut self.contacts.pairs), SplitMut::new(&mut self.contacts.pair_force));
+        let deferred = SplitMut::new(&mut self.blocks.deferred[..blocks]);
+        let block_ns = SplitMut::new(&mut self.blocks.block_ns[..blocks]);
+        let (drs, hists) = (&self.contacts.pair_dr, SplitMut::new(&mut self.contacts.pair_hist));
         team.run(|b| {
             if b >= blocks {
                 return Ok(());
@@ -169,15 +191,15 @@ impl World {
         .map_err(|e| *e)?;
         // Later blocks' contributions to shared particles, in block then pair order: the
         // serial pass's order.
-        for d in self.deferred.iter().flatten() {
-            self.f_buf[d.p as usize] += d.f;
-            self.t_buf[d.p as usize] += d.torque;
+        for d in self.blocks.deferred.iter().flatten() {
+            self.pair_scratch.f_buf[d.p as usize] += d.f;
+            self.pair_scratch.t_buf[d.p as usize] += d.torque;
         }
-        std::mem::swap(&mut self.p.f, &mut self.f_buf);
-        std::mem::swap(&mut self.p.torque, &mut self.t_buf);
+        std::mem::swap(&mut self.p.f, &mut self.pair_scratch.f_buf);
+        std::mem::swap(&mut self.p.torque, &mut self.pair_scratch.t_buf);
         // After the deferred ends are added: a new assignment clears their lists.
-        self.block_passes += 1;
-        if self.block_passes >= BALANCE_PASSES {
+        self.blocks.block_passes += 1;
+        if self.blocks.block_passes >= BALANCE_PASSES {
             self.balance_blocks();
         }
         Ok(())
@@ -185,7 +207,7 @@ impl World {
 
     /// [`PairStrategy::KeepAll`] on the team.
     fn pairs_keep_all(&mut self, update: bool, mc: bool, batched: bool) -> Result<(), StepError> {
-        let (n, np) = (self.p.len(), self.pairs.len());
+        let (n, np) = (self.p.len(), self.contacts.pairs.len());
         let ctx = PairCtx::new(
             &self.p,
             &self.coeffs,
@@ -197,15 +219,16 @@ impl World {
             self.liggghts_radii,
         );
 
-        self.threaded_passes.1 += 1;
-        if self.pair_out.len() != np {
-            self.pair_out.resize(np, PairOut::default());
+        self.blocks.threaded_passes.1 += 1;
+        if self.pair_scratch.pair_out.len() != np {
+            self.pair_scratch.pair_out.resize(np, PairOut::default());
         }
-        let team = self.team.as_ref().expect("threads() started the team");
+        let team = self.blocks.team.as_ref().expect("threads() started the team");
         {
-            let (pairs, outs) = (SplitMut::new(&mut self.pairs), SplitMut::new(&mut self.pair_out));
-            let forces = SplitMut::new(&mut self.pair_force);
-            let (drs, hists) = (&self.pair_dr, SplitMut::new(&mut self.pair_hist));
+            let (pairs, outs) =
+                (SplitMut::new(&mut self.contacts.pairs), SplitMut::new(&mut self.pair_scratch.pair_out));
+            let forces = SplitMut::new(&mut self.contacts.pair_force);
+            let (drs, hists) = (&self.contacts.pair_dr, SplitMut::new(&mut self.contacts.pair_hist));
             team.run_shares(np, |_, r| {
                 // SAFETY: the members' shares are disjoint ranges of pairs.
                 let (prs, outs, force, closure) = unsafe {
@@ -218,7 +241,7 @@ impl World {
         }
         // Each particle sums its own pairs' results in pair order, as the serial pass adds
         // them (from zero: the sums were cleared above): no write is shared between threads.
-        let (start, inc, outs) = (&self.inc_start, &self.inc, &self.pair_out);
+        let (start, inc, outs) = (&self.blocks.inc_start, &self.blocks.inc, &self.pair_scratch.pair_out);
         let (fs, ts) = (SplitMut::new(&mut self.p.f), SplitMut::new(&mut self.p.torque));
         team.for_shares(n, |_, r| {
             // SAFETY: the members' shares are disjoint ranges of particles.

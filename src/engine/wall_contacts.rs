@@ -8,8 +8,8 @@
 //! plane, so its tangential spring and multi-contact state go with it (LIGGGHTS does the same for
 //! coplanar neighbours), instead of restarting from zero on the second triangle.
 
-use super::mesh::{Feature, Mesh};
 use super::contacts::{WallCandidate, WallContact};
+use super::mesh::{Feature, Mesh};
 use super::{WallFix, WallGeom};
 use crate::physics::Vec3;
 

@@ -8,6 +8,19 @@ use crate::team::{share, SplitMut};
 use super::contacts::{contact_error, WallCandidate, WallContact};
 use super::{mesh, wall_contacts, Mesh, StepError, WallFix, WallGeom, World};
 
+/// What the wall stage keeps between steps to find the wall contacts.
+#[derive(Debug, Default)]
+pub(super) struct WallSearch {
+    pub(super) wc_scratch: wall_contacts::GroupScratch,
+    /// Wall elements that may touch a particle before the next candidate build, in the wall scan's
+    /// order (`update_wall_contacts`); built at every neighbour build (`wall_cand_builds`) and when
+    /// the meshes have moved half a skin since (`wall_travel`).
+    pub(super) wall_cand: Vec<WallCandidate>,
+    pub(super) wall_cand_builds: Option<u64>,
+    /// Upper bound on how far any mesh moved since the wall candidates were built [m].
+    pub(super) wall_travel: f64,
+}
+
 /// Fewest wall contacts worth a threaded wall pass.
 pub(super) const MIN_THREADED_WALL_CONTACTS: usize = 64;
 
@@ -20,24 +33,27 @@ impl World {
         // meshes move less than half a skin more. The exact test below then finds the same
         // contacts, in the same order, as a scan of every particle against every wall element.
         let margin = 1.5 * self.skin;
-        if self.wall_cand_builds != Some(self.builds) || self.wall_travel > 0.5 * self.skin {
+        if self.wall_search.wall_cand_builds != Some(self.builds)
+            || self.wall_search.wall_travel > 0.5 * self.skin
+        {
             self.build_wall_candidates(margin);
         }
-        std::mem::swap(&mut self.wc, &mut self.wc_old);
+        std::mem::swap(&mut self.contacts.wc, &mut self.contacts.wc_old);
         // Taken out for the search (no allocation: the vectors move back with their capacity).
-        let (mut wc, mut scratch) = (std::mem::take(&mut self.wc), std::mem::take(&mut self.wc_scratch));
+        let (mut wc, mut scratch) =
+            (std::mem::take(&mut self.contacts.wc), std::mem::take(&mut self.wall_search.wc_scratch));
         wall_contacts::collect(
             &wall_contacts::Scene::of(self),
-            &self.wall_cand,
-            &self.wc_old,
+            &self.wall_search.wall_cand,
+            &self.contacts.wc_old,
             &mut wc,
             &mut scratch,
         );
-        (self.wc, self.wc_scratch) = (wc, scratch);
-        if self.wc.len() != self.wc_old.len()
-            || self.wc.iter().zip(&self.wc_old).any(|(a, b)| a.key() != b.key())
+        (self.contacts.wc, self.wall_search.wc_scratch) = (wc, scratch);
+        if self.contacts.wc.len() != self.contacts.wc_old.len()
+            || self.contacts.wc.iter().zip(&self.contacts.wc_old).any(|(a, b)| a.key() != b.key())
         {
-            self.slots_stale = true;
+            self.multi.slots_stale = true;
         }
     }
 
@@ -45,9 +61,9 @@ impl World {
     /// the elements within reach + `margin` (by their distance whatever the element's active
     /// edges, so that the list holds every contact the exact test can find).
     pub(super) fn build_wall_candidates(&mut self, margin: f64) {
-        self.wall_cand.clear();
-        self.wall_cand_builds = Some(self.builds);
-        self.wall_travel = 0.0;
+        self.wall_search.wall_cand.clear();
+        self.wall_search.wall_cand_builds = Some(self.builds);
+        self.wall_search.wall_travel = 0.0;
         let p = &self.p;
         for i in 0..p.len() {
             let x = p.x[i];
@@ -62,7 +78,7 @@ impl World {
                 match &wall.geom {
                     WallGeom::Plane(pl) => {
                         if (x[pl.axis] - pl.pos).abs() < reach {
-                            self.wall_cand.push(cand(0, 0));
+                            self.wall_search.wall_cand.push(cand(0, 0));
                         }
                     }
                     WallGeom::Meshes(list) => {
@@ -73,7 +89,7 @@ impl World {
                             }
                             for (t, tri) in m.tris.iter().enumerate() {
                                 if mesh::distance_squared(tri, &x) < reach * reach {
-                                    self.wall_cand.push(cand(mi, t));
+                                    self.wall_search.wall_cand.push(cand(mi, t));
                                 }
                             }
                         }
@@ -285,7 +301,7 @@ impl World {
 
         // Body forces come next, then the walls (the order of the example decks' fixes); with
         // threads, each member adds both to its own particles (below).
-        let walls_threaded = threads > 1 && self.wc.len() >= MIN_THREADED_WALL_CONTACTS;
+        let walls_threaded = threads > 1 && self.contacts.wc.len() >= MIN_THREADED_WALL_CONTACTS;
         if let Some(g) = self.gravity.filter(|_| !walls_threaded) {
             for i in 0..n {
                 self.p.f[i] += self.p.mass[i] * g;
@@ -312,14 +328,14 @@ impl World {
             step: self.step,
             batched,
         };
-        if self.wall_force.len() != self.wc.len() {
-            self.wall_force.resize(self.wc.len(), Vec3::zeros());
+        if self.contacts.wall_force.len() != self.contacts.wc.len() {
+            self.contacts.wall_force.resize(self.contacts.wc.len(), Vec3::zeros());
         }
         if walls_threaded {
             // Member k's contacts start at its equal share's start moved back to the first
             // contact of that particle, its particles at that contact's (0 for the first member,
             // n after the last): non-decreasing in k, since the contacts are in particle order.
-            let (wc, cuts) = (&self.wc, &mut self.wall_cuts);
+            let (wc, cuts) = (&self.contacts.wc, &mut self.blocks.wall_cuts);
             cuts.clear();
             cuts.extend((0..threads).map(|k| {
                 let mut c = share(wc.len(), threads, k).start;
@@ -330,10 +346,11 @@ impl World {
             }));
             cuts.push([wc.len(), n]);
         }
-        match self.team.as_ref().filter(|_| walls_threaded) {
+        match self.blocks.team.as_ref().filter(|_| walls_threaded) {
             Some(team) => {
-                let (cuts, gravity, mass) = (&self.wall_cuts, self.gravity, &self.p.mass);
-                let (cs, wf) = (SplitMut::new(&mut self.wc), SplitMut::new(&mut self.wall_force));
+                let (cuts, gravity, mass) = (&self.blocks.wall_cuts, self.gravity, &self.p.mass);
+                let (cs, wf) =
+                    (SplitMut::new(&mut self.contacts.wc), SplitMut::new(&mut self.contacts.wall_force));
                 let (fs, ts) = (SplitMut::new(&mut self.p.f), SplitMut::new(&mut self.p.torque));
                 team.run(|k| {
                     let ([c0, p0], [c1, p1]) = (cuts[k], cuts[k + 1]);
@@ -349,9 +366,15 @@ impl World {
                     ctx.forces(c, w, f, t, p0)
                 })?;
             }
-            None => ctx.forces(&mut self.wc, &mut self.wall_force, &mut self.p.f, &mut self.p.torque, 0)?,
+            None => ctx.forces(
+                &mut self.contacts.wc,
+                &mut self.contacts.wall_force,
+                &mut self.p.f,
+                &mut self.p.torque,
+                0,
+            )?,
         }
-        for (c, wf) in self.wc.iter().zip(&self.wall_force) {
+        for (c, wf) in self.contacts.wc.iter().zip(&self.contacts.wall_force) {
             if let WallGeom::Meshes(_) = self.walls[c.wall as usize].geom {
                 self.meshes[c.mesh as usize].force -= *wf;
             }
@@ -391,7 +414,7 @@ mod tests {
         }
         let scene = wall_contacts::Scene::of(w);
         let (mut out, mut scratch) = (Vec::new(), Vec::new());
-        wall_contacts::collect(&scene, &all, &w.wc_old, &mut out, &mut scratch);
+        wall_contacts::collect(&scene, &all, &w.contacts.wc_old, &mut out, &mut scratch);
         out.iter().map(WallContact::key).collect()
     }
 
@@ -431,15 +454,15 @@ mod tests {
         w.meshes.push(Mesh::new("piston", 0, raw).unwrap());
         w.walls.push(WallFix { name: "piston".into(), geom: WallGeom::Meshes(vec![0]) });
         w.setup().unwrap();
-        let keys = |w: &World| w.wc.iter().map(WallContact::key).collect::<Vec<_>>();
+        let keys = |w: &World| w.contacts.wc.iter().map(WallContact::key).collect::<Vec<_>>();
         assert_eq!(keys(&w), scanned_keys(&w));
         let (mut travel_builds, mut onsets, mut before) = (0, 0, 0);
         for s in 0..240 {
             // Down and up by 8e-4 m at 2 m/s: 2e-5 m per step.
             w.meshes[0].velocity = Vec3::new(0.0, 0.0, if (s / 40) % 2 == 0 { -2.0 } else { 2.0 });
-            let travel = w.wall_travel;
+            let travel = w.wall_search.wall_travel;
             w.step().unwrap();
-            travel_builds += usize::from(w.wall_travel < travel);
+            travel_builds += usize::from(w.wall_search.wall_travel < travel);
             let scan = scanned_keys(&w);
             let on_piston = scan.iter().filter(|k| k.1 == 5).count();
             onsets += on_piston.saturating_sub(before);

@@ -7,14 +7,13 @@ use crate::physics::hertz::Tangential;
 use crate::physics::{Material, PairCoeffs, Vec3};
 use crate::team::Team;
 
-use super::blocks::PairThreads;
-use super::contacts::{Pair, PairDr, PairHist, PairLoad, WallCandidate, WallContact};
-use super::multicontact::{McType, Slot};
-use super::neighbor::CellList;
-use super::pair_eval::PairOut;
-use super::probe::ThreadProbe;
-use super::sinks::Deferred;
-use super::{wall_contacts, Domain, Mesh, Particles, WallFix};
+use super::blocks::{Blocks, PairThreads};
+use super::contacts::Contacts;
+use super::multicontact::{McState, McType};
+use super::neighbor_list::NeighborList;
+use super::pair_pass::PairScratch;
+use super::wall_pass::WallSearch;
+use super::{Domain, Mesh, Particles, WallFix};
 
 /// Which multi-contact closure the contacts use.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,10 +90,6 @@ pub struct World {
     pub mc_every: u64,
     /// Full multi-contact passes so far.
     pub mc_updates: u64,
-    /// Step of the next full multi-contact pass under `mc_every`.
-    pub(super) mc_due: u64,
-    /// Neighbour builds at the last full multi-contact pass (a build renumbers the pairs).
-    pub(super) mc_builds: u64,
     /// Spatial sorting (LAMMPS `atom_modify sort`): at the first neighbour build at least this
     /// many steps after the last sort, particles are renumbered bin by bin in row-major order, so
     /// that particles close in space are close in memory and the pair loop stays in cache as N
@@ -103,92 +98,17 @@ pub struct World {
     pub sort_every: u64,
     /// Number of spatial sorts so far.
     pub sorts: u64,
-    pub(super) next_sort: u64,
-
-    pub(super) cells: CellList,
-    pub(super) cand: Vec<(u32, u32)>,
-    pub(super) pairs: Vec<Pair>,
-    pub(super) pairs_old: Vec<Pair>,
-    /// Per pair, under the multi-contact closure: what its next pass reads (empty under Hertz).
-    pub(super) pair_hist: Vec<PairHist>,
-    pub(super) pair_hist_old: Vec<PairHist>,
-    pub(super) wc: Vec<WallContact>,
-    pub(super) wc_old: Vec<WallContact>,
-    pub(super) wc_scratch: wall_contacts::GroupScratch,
-    /// Wall elements that may touch a particle before the next candidate build, in the wall scan's
-    /// order (`update_wall_contacts`); built at every neighbour build (`wall_cand_builds`) and when
-    /// the meshes have moved half a skin since (`wall_travel`).
-    pub(super) wall_cand: Vec<WallCandidate>,
-    pub(super) wall_cand_builds: Option<u64>,
-    /// Upper bound on how far any mesh moved since the wall candidates were built [m].
-    pub(super) wall_travel: f64,
-    pub(super) x_build: Vec<Vec3>,
-    pub(super) need_build: bool,
-    /// Lees–Edwards offset travelled since the last neighbour build (not wrapped) [m].
-    pub(super) le_travel: f64,
-    /// Interaction cutoff without skin, 2 r_max × pair_reach, at the last build [m].
-    pub(super) cut_build: f64,
-    pub(super) mc_types: Vec<McType>,
-    // multi-contact scratch (kept between steps: no allocation in the loop)
-    pub(super) slot_start: Vec<u32>,
-    pub(super) slots: Vec<Slot>,
-    pub(super) slot_fill: Vec<u32>,
-    /// Radius change per slot, from this step's kernel pass.
-    pub(super) slot_dr: Vec<f64>,
-    /// Per particle, its pairs (see `build_incidence`), as compressed rows.
-    pub(super) inc_start: Vec<u32>,
-    pub(super) inc: Vec<u32>,
-    /// Threaded pair pass: per particle, the block of pairs that writes its sums directly (the
-    /// first block, in pair order, with a pair on it; see [`World::assign_owners`]).
-    pub(super) owner: Vec<u16>,
-    /// (pairs, blocks, particles) the owners were computed for; None after a neighbour build.
-    pub(super) owner_key: Option<(usize, usize, usize)>,
-    /// Where the blocks of the owning threaded pass start in the pair list (and the end): equal
-    /// runs after each assignment, then moved by [`World::balance_blocks`] to even out the
-    /// members' measured times.
-    pub(super) pair_cuts: Vec<usize>,
-    /// Per block, nanoseconds spent in the threaded pair pass since the last balancing, and the
-    /// passes counted.
-    pub(super) block_ns: Vec<u64>,
-    pub(super) block_passes: u32,
-    /// Few enough pair ends fall on particles another block owns for the blocks to pay (else the
-    /// threaded pass keeps every pair's result and sums per particle afterwards).
-    pub(super) owned_blocks_pay: bool,
-    /// Threaded pair passes so far: (by owned blocks, keeping every pair's result).
-    pub(super) threaded_passes: (u64, u64),
-    /// Threaded pair pass: per block, its contributions to particles another block owns, in pair
-    /// order (kept between steps: no allocation in the loop once grown).
-    pub(super) deferred: Vec<Vec<Deferred>>,
-    /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
-    /// contact appeared or left, a pair entered or left the multi-contact set).
-    pub(super) slots_stale: bool,
-    /// Per pair: what this step's multi-contact pass reads (filled for pairs taking part).
-    pub(super) pair_loads: Vec<PairLoad>,
-    /// Geometry tolerance: the kept influence matrices, one per particle.
-    pub(super) mc_cache: Option<InfluenceCache>,
-    pub(super) pair_out: Vec<PairOut>,
-    /// Per pair, under the multi-contact closure: this step's radius changes (a Hertz pass reads none).
-    pub(super) pair_dr: Vec<PairDr>,
-    /// Per pair: the total contact force on i from j at the last force pass (zero when apart),
-    /// for the stress and coordination outputs.
-    pub(super) pair_force: Vec<Vec3>,
-    pub(super) pair_mc: Vec<bool>,
-    /// Per wall contact: its force on the particle at the last force pass (for the mesh sums).
-    pub(super) wall_force: Vec<Vec3>,
-    pub(super) f_buf: Vec<Vec3>,
-    pub(super) t_buf: Vec<Vec3>,
-    pub(super) parallel: bool,
-    /// When `PairThreads::Auto` times steps with and without threads, and what it measured.
-    pub(super) probe: ThreadProbe,
     /// Whether a step's force passes (pairs, walls, multi-contact kernel) and half-kicks run on
     /// the threads' team (default: decided by the timing probe).
     pub pair_threads: PairThreads,
-    /// The threads of the threaded passes (`rayon::current_num_threads()` members, started at
-    /// the first threaded step and kept for the run).
-    pub(super) team: Option<Team>,
-    /// Per member of the threaded wall pass: its first wall contact and first particle (and
-    /// after the last member, the ends).
-    pub(super) wall_cuts: Vec<[usize; 2]>,
+
+    // The stages' own state.
+    pub(super) contacts: Contacts,
+    pub(super) wall_search: WallSearch,
+    pub(super) multi: McState,
+    pub(super) lists: NeighborList,
+    pub(super) blocks: Blocks,
+    pub(super) pair_scratch: PairScratch,
 }
 
 impl World {
@@ -254,15 +174,15 @@ impl World {
                 ));
             }
         }
-        self.mc_types = self.materials.iter().map(|m| McType { material: *m }).collect();
+        self.multi.mc_types = self.materials.iter().map(|m| McType { material: *m }).collect();
         let tol = self.mc_geometry_tolerance;
         if tol == 0.0 {
-            self.mc_cache = None;
-        } else if self.mc_cache.as_ref().is_none_or(|c| c.tolerance() != tol) {
-            self.mc_cache = Some(InfluenceCache::new(tol).map_err(|e| e.to_string())?);
+            self.multi.mc_cache = None;
+        } else if self.multi.mc_cache.as_ref().is_none_or(|c| c.tolerance() != tol) {
+            self.multi.mc_cache = Some(InfluenceCache::new(tol).map_err(|e| e.to_string())?);
         }
-        self.need_build = true;
-        self.mc_due = 0;
+        self.lists.need_build = true;
+        self.multi.mc_due = 0;
         self.neighbor_check().map_err(|e| e.to_string())?;
         // LIGGGHTS zeroes mesh node velocities at set-up (fix move/mesh sets them again in the
         // first step), so the set-up forces see resting meshes.
@@ -278,54 +198,24 @@ impl World {
         Ok(warnings)
     }
 
-    /// One velocity-Verlet step.
+    /// One velocity-Verlet step, stage by stage in the LAMMPS `Verlet` order.
     pub fn step(&mut self) -> Result<(), StepError> {
         self.step += 1;
-        let dt = self.dt;
         // Threads pay only when the cores are free: the probe (`probe.rs`) times windows of whole
         // steps with and without them and keeps the faster. Whole steps, so that what threading
         // changes outside the threaded passes counts too, but without the neighbour check: a
         // list build costs the same in both modes and would weigh on whichever slice it falls in.
-        let plan = match self.pair_threads {
-            PairThreads::Auto => self.probe.plan(self.step),
-            fixed => {
-                self.parallel = fixed == PairThreads::Parallel;
-                None
-            }
-        };
-        if let Some(s) = plan {
-            self.parallel = s.threads;
-        }
-        let t0 = plan.filter(|s| s.timed).map(|_| std::time::Instant::now());
+        let mut timer = self.blocks.begin_step(self.pair_threads, self.step);
         if self.integrate {
             self.initial_integrate();
         }
-        if let Some(d) = self.domain.as_mut() {
-            d.advance_shear(dt);
-            self.le_travel += d.le_vjump * dt;
-        }
-        let mut travel: f64 = 0.0;
-        for m in &mut self.meshes {
-            if m.velocity != Vec3::zeros() {
-                let d = m.velocity * dt;
-                m.translate(&d);
-                travel = travel.max(d.norm());
-            }
-        }
-        self.wall_travel += travel;
-        let t_check = t0.is_some().then(std::time::Instant::now);
-        self.neighbor_check()?;
-        let check = t_check.map_or(std::time::Duration::ZERO, |t| t.elapsed());
+        self.move_boundaries();
+        timer.leave_out(|| self.neighbor_check())?;
         self.compute_forces(true)?;
         if self.integrate {
             self.final_integrate()?;
         }
-        if let Some(t0) = t0 {
-            let ns = t0.elapsed().saturating_sub(check).as_nanos() as u64;
-            if let Some(threads) = self.probe.record(self.step, ns) {
-                self.parallel = threads;
-            }
-        }
+        self.blocks.end_step(self.step, timer);
         Ok(())
     }
 
