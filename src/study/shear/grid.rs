@@ -13,7 +13,7 @@ use super::protocol::{
 };
 use super::report::write_outputs;
 use super::surface::{response_surface, SurfaceRow};
-use crate::validate::uniaxial::calibrated;
+use crate::harness::calibration::calibrated;
 
 /// The parameter grid of a study.
 #[derive(Debug, Clone)]

@@ -7,7 +7,7 @@ use super::grid::{law_text, write_atomic, CostRow, Options};
 use super::paper::{PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 use super::protocol::{RunResult, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, PHI_START, YOUNGS_MODULUS};
 use super::surface::{key3, qs_points, SurfaceRow};
-use crate::validate::plot::{self, Chart, Series};
+use crate::harness::plot::{self, Chart, Series};
 
 pub(super) fn f(x: f64) -> String {
     if x.is_finite() {
