@@ -68,3 +68,20 @@ impl Law {
         Law { law: "0", gamma, mpr, ..Self::HERTZ }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// The recorded calibration is built in: every row parses into a valid law, and a ν without a
+    /// row has none (the case then runs the App. B values only).
+    #[test]
+    fn recorded_calibration_parses() {
+        let rows = super::calibration_rows();
+        assert!(!rows.is_empty());
+        for (nu, gamma, mpr, e) in rows {
+            let law = super::calibrated(nu).expect("a row for its own ν");
+            assert_eq!((law.gamma, law.mpr, law.youngs_modulus), (gamma, mpr, e));
+            assert!((0.0..=0.5).contains(&nu) && gamma > 0.0 && mpr >= 0.0 && e > 0.0);
+        }
+        assert!(super::calibrated(0.123).is_none());
+    }
+}
