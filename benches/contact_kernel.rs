@@ -12,7 +12,7 @@ use mcdem::physics::Vec3;
 
 /// `n` loaded contacts spread over the sphere (the hard cases' many-contact particle).
 fn contacts(n: usize, r: f64) -> Vec<ContactLoad> {
-    mcdem::validate::hard_cases::spread_contacts(n, r, 1e-3)
+    mcdem::harness::spread_contacts(n, r, 1e-3)
 }
 
 fn kernel(c: &mut Criterion) {

@@ -100,6 +100,48 @@ pub fn read_ave_time(path: &Path) -> Result<Vec<Vec<f64>>, String> {
     parse_ave_time(&read(path)?, &path.display().to_string())
 }
 
+/// The figures of the `Loop time of T on P procs for N steps with A atoms` lines of a LIGGGHTS or
+/// `mcdem run` log (mcdem appends its details in parentheses, which are not read here), summed
+/// over the runs of the log: the one reader of that line for the benchmarks and the harness.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopTotals {
+    /// Loop time T summed over the lines [s].
+    pub seconds: f64,
+    /// Steps N summed over the lines.
+    pub steps: u64,
+    /// N × A summed over the lines (particle-steps).
+    pub particle_steps: f64,
+    /// A of the last line.
+    pub atoms: u64,
+}
+
+impl LoopTotals {
+    /// Particle-steps per second of the loops together (0 when they took no measurable time).
+    pub fn rate(&self) -> f64 {
+        if self.seconds > 0.0 {
+            self.particle_steps / self.seconds
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Reads every `Loop time of` line of `text`; `None` when there is none with steps or one does
+/// not have the LIGGGHTS layout (T at word 4, N at word 9, A at word 12).
+pub fn loop_totals(text: &str) -> Option<LoopTotals> {
+    let mut t = LoopTotals { seconds: 0.0, steps: 0, particle_steps: 0.0, atoms: 0 };
+    for l in text.lines().filter(|l| l.starts_with("Loop time of")) {
+        let w: Vec<&str> = l.split_whitespace().collect();
+        let (secs, steps, atoms): (f64, u64, u64) =
+            (w.get(3)?.parse().ok()?, w.get(8)?.parse().ok()?, w.get(11)?.parse().ok()?);
+        t.seconds += secs;
+        t.steps += steps;
+        t.particle_steps += steps as f64 * atoms as f64;
+        t.atoms = atoms;
+    }
+    (t.steps > 0).then_some(t)
+}
+
 /// Normalised root-mean-square error of `model` against `reference` (paired samples):
 /// RMSE / mean(|reference|), the paper's NRMSE (Sect. 3, Fig. 4).
 pub fn nrmse(model: &[f64], reference: &[f64]) -> f64 {
@@ -141,5 +183,17 @@ mod tests {
         assert!(parse_ave_time("1000 nan?\n", "a").is_err());
         // RMSE of (1, −1) is 1, mean |reference| is 2.
         assert_eq!(nrmse(&[3.0, 1.0], &[2.0, 2.0]), 0.5);
+    }
+
+    #[test]
+    fn loop_time_lines_of_both_engines_are_summed() {
+        // A LIGGGHTS line and an mcdem line with its details in parentheses.
+        let text = "x\nLoop time of 2.5 on 1 procs for 1000 steps with 514 atoms\n\
+                    Loop time of 0.5 on 1 procs for 1000 steps with 400 atoms (1e6 particle-steps/s, 2 threads, 3 neighbour builds)\n";
+        let t = loop_totals(text).unwrap();
+        assert_eq!((t.seconds, t.steps, t.particle_steps, t.atoms), (3.0, 2000, 914_000.0, 400));
+        assert_eq!(t.rate(), 914_000.0 / 3.0);
+        assert_eq!(loop_totals("nothing"), None);
+        assert_eq!(loop_totals("Loop time of 1 on 1 procs for x steps with 5 atoms"), None);
     }
 }

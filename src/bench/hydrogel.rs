@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use super::{Options, Report, Row};
+use crate::outputs::loop_totals;
 
 pub const SCENE: &str = "hydrogel_514";
 
@@ -15,19 +16,6 @@ const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_publi
 
 /// (law variable, model name) as in `liggghts_inputs/select_law.inc`.
 const LAWS: [(&str, &str); 3] = [("1", "hertz"), ("2", "standard_mc"), ("0", "mc_advanced")];
-
-/// Seconds, steps and atoms summed over the "Loop time of T on P procs for N steps with A atoms"
-/// lines of a LIGGGHTS or mcdem log.
-pub(super) fn loop_time(text: &str) -> Option<(f64, f64, usize)> {
-    let (mut t, mut steps, mut atoms) = (0.0, 0.0, 0);
-    for l in text.lines().filter(|l| l.starts_with("Loop time of")) {
-        let w: Vec<&str> = l.split_whitespace().collect();
-        t += w.get(3)?.parse::<f64>().ok()?;
-        steps += w.get(8)?.parse::<f64>().ok()?;
-        atoms = w.get(11)?.parse().ok()?;
-    }
-    (steps > 0.0).then_some((t, steps, atoms))
-}
 
 pub(super) fn sibling(name: &str) -> Option<PathBuf> {
     let p = std::env::current_exe().ok()?.with_file_name(name);
@@ -70,8 +58,8 @@ fn measure_force(cmd: &mut Command, what: &str) -> Result<(f64, f64, Vec<f64>), 
         let tail: Vec<&str> = text.lines().rev().take(5).collect();
         return Err(format!("{what} failed: {}", tail.join(" | ")));
     }
-    let (t, steps, atoms) = loop_time(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
-    Ok((t, steps * atoms as f64 / t, force))
+    let lt = loop_totals(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
+    Ok((lt.seconds, lt.rate(), force))
 }
 
 /// Largest piston-force difference over the force range of `exact`.
@@ -282,14 +270,6 @@ fn approximate_row(
 
 #[cfg(test)]
 mod tests {
-    #[test]
-    fn loop_time_lines_of_both_engines_are_summed() {
-        let text = "x\nLoop time of 2.5 on 1 procs for 1000 steps with 514 atoms\n\
-                    Loop time of 0.5 on 1 procs for 1000 steps with 514 atoms (1e6 particle-steps/s, 2 threads, 3 neighbour builds)\n";
-        assert_eq!(super::loop_time(text), Some((3.0, 2000.0, 514)));
-        assert_eq!(super::loop_time("nothing"), None);
-    }
-
     #[test]
     fn the_target_approximation_runs_in_both_engines() {
         let (tol, every) = super::TARGET_APPROXIMATION;

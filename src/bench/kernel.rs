@@ -13,7 +13,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) {
     let r = 1e-3;
     let budget = if opts.quick { 0.05 } else { 0.5 };
     for n in [2usize, 6, 12] {
-        let cs = crate::validate::hard_cases::spread_contacts(n, r, 1e-3);
+        let cs = crate::harness::spread_contacts(n, r, 1e-3);
         let (mut delta, mut fb) = (vec![0.0; n], vec![false; n]);
         for (model, cap) in
             [("kernel_standard", None), ("kernel_advanced", Some(Cap { mpr: 0.11, test: MprTest::Abs }))]

@@ -9,9 +9,10 @@ use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
 
-use super::hydrogel::{loop_time, mpirun_available, on_path, on_two_ranks, sibling};
+use super::hydrogel::{mpirun_available, on_path, on_two_ranks, sibling};
 use super::{Options, Report, Row};
 use crate::engine::{Closure, Domain, World};
+use crate::outputs::loop_totals;
 use crate::physics::ghods2022::MprTest;
 use crate::physics::hertz::Tangential;
 use crate::physics::{Material, Vec3};
@@ -190,9 +191,8 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
                     let tail: Vec<&str> = text.lines().rev().take(5).collect();
                     return Err(format!("{what} failed: {}", tail.join(" | ")));
                 }
-                let (secs, st, atoms) =
-                    loop_time(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
-                let rate = st * atoms as f64 / secs;
+                let lt = loop_totals(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
+                let (secs, rate) = (lt.seconds, lt.rate());
                 say(&format!("{what}: {rate:.3e} particle-steps/s"));
                 report.rows.push(Row {
                     engine,

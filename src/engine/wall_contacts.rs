@@ -8,8 +8,9 @@
 //! plane, so its tangential spring and multi-contact state go with it (LIGGGHTS does the same for
 //! coplanar neighbours), instead of restarting from zero on the second triangle.
 
+use super::contacts::{WallCandidate, WallContact};
 use super::mesh::{Feature, Mesh};
-use super::{WallCandidate, WallContact, WallFix, WallGeom};
+use super::{WallFix, WallGeom};
 use crate::physics::Vec3;
 
 /// Per contact of the particle and mesh being collected: where on its triangle its point lies and

@@ -6,6 +6,10 @@
 //! stiffness/damping coefficients that [`tangential_history`] then reads.
 
 use super::material::PairCoeffs;
+// The tangential sub-model is a choice stored with the pair coefficients, so it lives with them
+// in `material`; re-exported here beside the two functions it selects. `material` imports nothing
+// from this file: the dependency points one way.
+pub use super::material::Tangential;
 use super::Vec3;
 
 /// √(5/6), the constant of Eqs. C.2 and C.7.
@@ -116,17 +120,6 @@ pub fn tangential_history(
         ft -= normal.gamma_t * vtr;
     }
     ft
-}
-
-/// The tangential sub-model of a contact (LIGGGHTS `tangential history|no_history`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Tangential {
-    /// Elastic spring on the accumulated tangential displacement with damping and Coulomb limit
-    /// ([`tangential_history`]).
-    #[default]
-    History,
-    /// Viscous tangential damping only, Coulomb-limited ([`tangential_no_history`]).
-    NoHistory,
 }
 
 /// Tangential force without history (LIGGGHTS `tangential no_history`): F_t = −γ v_t,rel with

@@ -4,7 +4,6 @@
 use std::fmt;
 
 use super::ghods2022::{Cap, MprTest};
-use super::hertz::Tangential;
 
 /// Per-type material of a particle (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,6 +92,18 @@ impl Material {
     pub fn hertz(youngs_modulus: f64, poisson_ratio: f64) -> Result<Self, MaterialError> {
         Self::new(youngs_modulus, poisson_ratio, 0.0, None)
     }
+}
+
+/// The tangential sub-model of a contact (LIGGGHTS `tangential history|no_history`), chosen per
+/// pair table; the forces are [`super::hertz::tangential_history`] and
+/// [`super::hertz::tangential_no_history`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Tangential {
+    /// Elastic spring on the accumulated tangential displacement with damping and Coulomb limit.
+    #[default]
+    History,
+    /// Viscous tangential damping only, Coulomb-limited.
+    NoHistory,
 }
 
 /// Coefficients of one type pair, precomputed once (App. C, Eqs. C.3, C.4, C.8).

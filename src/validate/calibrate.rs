@@ -17,7 +17,8 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::uniaxial::{self, Law, Setup, E_HYDROGEL};
+use super::uniaxial::{self, Setup};
+use crate::harness::calibration::{Law, E_HYDROGEL};
 use crate::nonlocal::KernelKind;
 
 #[derive(Debug, Clone)]
@@ -164,7 +165,7 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| format!("cannot create {}: {e}", opts.out.display()))?;
     let kind = s.kernel;
-    let scratch = super::runner::Scratch::new()?;
+    let scratch = crate::harness::runner::Scratch::new()?;
     let scratch = &scratch.0;
     let bar = indicatif::ProgressBar::new_spinner();
     let lines = Mutex::new(());
@@ -292,28 +293,28 @@ fn write_outputs(
             .unwrap_or_else(|| "one ν only: no line".into())
     );
     let series = vec![
-        super::plot::Series {
+        crate::harness::plot::Series {
             label: "γ".into(),
             points: fits.iter().map(|f| (f.nu, f.gamma)).collect(),
             markers: true,
             thin: false,
         },
-        super::plot::Series {
+        crate::harness::plot::Series {
             label: "E / 23.3 kPa".into(),
             points: fits.iter().map(|f| (f.nu, f.youngs_modulus_pa / E_HYDROGEL)).collect(),
             markers: true,
             thin: false,
         },
-        super::plot::Series {
+        crate::harness::plot::Series {
             label: "MPR × 10".into(),
             points: fits.iter().map(|f| (f.nu, 10.0 * f.mpr)).collect(),
             markers: true,
             thin: false,
         },
     ];
-    super::plot::draw(
+    crate::harness::plot::draw(
         &opts.out.join("calibration.png"),
-        &super::plot::Chart {
+        &crate::harness::plot::Chart {
             title: "Calibrated advanced-MC parameters (Fig. 5 analogue)",
             x_label: "Poisson ratio ν",
             y_label: "value",

@@ -12,8 +12,8 @@ use std::fmt::Write as _;
 
 use serde_json::json;
 
-use super::runner::{self, DeckRun};
 use super::{CaseResult, ModelSummary, Options, Row, Target};
+use crate::harness::runner::{self, DeckRun};
 use crate::nonlocal::scene::Scene;
 use crate::nonlocal::KernelKind;
 use crate::outputs::nrmse;
@@ -426,13 +426,13 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     let file = format!("{}_stress.png", die.case);
     let mut series = Vec::new();
     let mut add = |label: &str, c: &Curve, markers: bool| {
-        series.push(super::plot::Series {
+        series.push(crate::harness::plot::Series {
             label: format!("{label} plate"),
             points: c.iter().map(|p| (p.0, p.1)).collect(),
             markers,
             thin: false,
         });
-        series.push(super::plot::Series {
+        series.push(crate::harness::plot::Series {
             label: format!("{label} side"),
             points: c.iter().map(|p| (p.0, p.2)).collect(),
             markers,
@@ -445,9 +445,9 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     for (name, c) in &curves {
         add(name, c, false);
     }
-    super::plot::draw(
+    crate::harness::plot::draw(
         &opts.out.join(&file),
-        &super::plot::Chart {
+        &crate::harness::plot::Chart {
             title: die.title,
             x_label: "plate displacement / r",
             y_label: "stress [Pa]",
@@ -574,7 +574,7 @@ fn gamma_scan(
     let mut series = Vec::new();
     for ((k, _), runs) in refs.iter().zip(&found) {
         for (q, thin) in [("plate", false), ("side", true)] {
-            series.push(super::plot::Series {
+            series.push(crate::harness::plot::Series {
                 label: format!("{q} vs nonlocal {}", k.name()),
                 points: runs.iter().map(|r| (r.0, 100.0 * if thin { r.2 } else { r.1 })).collect(),
                 markers: false,
@@ -583,9 +583,9 @@ fn gamma_scan(
         }
     }
     let title = format!("{}: standard MC NRMSE against γ", die.case);
-    super::plot::draw(
+    crate::harness::plot::draw(
         &out.join(&file),
-        &super::plot::Chart {
+        &crate::harness::plot::Chart {
             title: &title,
             x_label: "γ (Eq. 2 prefactor)",
             y_label: "NRMSE [%]",

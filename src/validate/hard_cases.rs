@@ -47,22 +47,8 @@ fn finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-/// `n` contacts, each carrying `force`, spread evenly over a sphere of radius `r` (Fibonacci
-/// lattice), at depth 0.95 r: the standard many-contact particle of the hard cases and benchmarks.
-pub fn spread_contacts(n: usize, r: f64, force: f64) -> Vec<ContactLoad> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let rho = (1.0 - z * z).sqrt();
-            let phi = golden * i as f64;
-            ContactLoad { point: Vec3::new(rho * phi.cos(), rho * phi.sin(), z) * 0.95 * r, force }
-        })
-        .collect()
-}
-
 fn spread(n: usize, force: f64) -> Vec<ContactLoad> {
-    spread_contacts(n, R, force)
+    crate::harness::spread_contacts(n, R, force)
 }
 
 fn antipodal() -> Outcome {
@@ -364,13 +350,13 @@ fn gamma_sweep_plot(opts: &Options, rows: &mut Vec<Row>) -> Result<String, Strin
         }
         // Standard MC as a line under the advanced-MC markers: below gamma_crit they coincide.
         let markers = mpr.is_some();
-        series.push(super::plot::Series {
+        series.push(crate::harness::plot::Series {
             label: format!("{label} (max)"),
             points: hi_pts,
             markers,
             thin: false,
         });
-        series.push(super::plot::Series {
+        series.push(crate::harness::plot::Series {
             label: format!("{label} (min)"),
             points: lo_pts,
             markers: false,
@@ -378,9 +364,9 @@ fn gamma_sweep_plot(opts: &Options, rows: &mut Vec<Row>) -> Result<String, Strin
         });
     }
     let file = "hard_cases_gamma_sweep.png";
-    super::plot::draw(
+    crate::harness::plot::draw(
         &opts.out.join(file),
-        &super::plot::Chart {
+        &crate::harness::plot::Chart {
             title: "Sphere between plates (overlap 0.1 r): lagged MC plate force / Hertz",
             x_label: "geometric prefactor gamma",
             y_label: "plate force / Hertz force",

@@ -11,10 +11,12 @@ pub mod die;
 pub mod hard_cases;
 pub mod packing;
 pub mod physics;
-pub mod plot;
 pub mod progress;
-pub mod runner;
 pub mod uniaxial;
+
+/// The report plots live in `crate::harness` (shared with `bench` and `study`); re-exported for the
+/// MPM command line, which draws with them by this path.
+pub use crate::harness::plot;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

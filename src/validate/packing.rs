@@ -169,7 +169,7 @@ pub fn stats(spheres: &[Placed], v: &[Vec3]) -> Stats {
 
 /// Makes the packing for `seed` (loose placement, then the settling deck) and writes it to `out`.
 pub fn make(seed: u64, out: &Path) -> Result<Stats, String> {
-    let scratch = super::runner::Scratch::new()?;
+    let scratch = crate::harness::runner::Scratch::new()?;
     let dir = &scratch.0;
     let loose_spheres: Vec<Placed> =
         loose(seed)?.into_iter().enumerate().map(|(k, (d, x))| (k as i64 + 1, d, x)).collect();
@@ -183,7 +183,7 @@ pub fn make(seed: u64, out: &Path) -> Result<Stats, String> {
         vars: vec![
             ("loose".into(), loose_path.display().to_string()),
             ("state".into(), state.display().to_string()),
-            ("dir".into(), super::runner::decks_dir().display().to_string()),
+            ("dir".into(), crate::harness::runner::decks_dir().display().to_string()),
         ],
         log: Some("none".into()),
         quiet: true,

@@ -13,9 +13,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::runner::{self, DeckRun};
 use super::{CaseResult, ModelSummary, Options, Row, Target};
 use crate::deck::DeckFailure;
+use crate::harness::calibration::{calibrated, Law};
+use crate::harness::runner::{self, DeckRun};
 use crate::nonlocal::{Kernel, KernelKind};
 use crate::outputs::nrmse;
 
@@ -39,35 +40,6 @@ const PHI_MIN: f64 = 0.66;
 /// run at every ν for comparison with the per-ν calibration.
 const GAMMA_ADVANCED: f64 = 0.81;
 const MPR_ADVANCED: f64 = 0.11;
-/// The per-ν advanced-MC parameters fitted by `mcdem calibrate` (full mode, kernel `sphere`, the
-/// same start states and reference as this case), recorded in `validation/reference/` and built
-/// into the binary so the case needs no file at run time.
-const CALIBRATION: &str = include_str!("../../validation/reference/calibration_mcdem.csv");
-
-/// The recorded calibration's law for ν, if it has this ν (columns as `mcdem calibrate` writes
-/// them: nu,gamma,mpr,youngs_modulus_pa,…; `#` lines are comments).
-pub fn calibrated(nu: f64) -> Option<Law> {
-    calibration_rows()
-        .into_iter()
-        .find(|r| (r.0 - nu).abs() < 1e-9)
-        .map(|r| Law { youngs_modulus: r.3, ..Law::advanced(r.1, r.2) })
-}
-
-/// (ν, γ, MPR, E) of every recorded calibration row.
-fn calibration_rows() -> Vec<(f64, f64, f64, f64)> {
-    CALIBRATION
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("nu,") && !l.trim().is_empty())
-        .map(|l| {
-            let v: Vec<f64> = l
-                .split(',')
-                .take(4)
-                .map(|x| x.trim().parse().expect("recorded calibration: a number"))
-                .collect();
-            (v[0], v[1], v[2], v[3])
-        })
-        .collect()
-}
 
 /// Geometry tolerance of an extra advanced-MC run (fraction of the radius).
 const GEOMETRY_TOLERANCE: f64 = 1e-3;
@@ -148,43 +120,6 @@ fn compression(run: &DeckRun, s: &Setup) -> Curve {
             (step >= 0.0 && step <= n).then(|| (phi_of(Z0 - speed * step * DT), r[3] / (LX * LY)))
         })
         .collect()
-}
-
-/// The hydrogel's Young's modulus [Pa] (paper Table 1).
-pub const E_HYDROGEL: f64 = 23.3e3;
-
-/// A contact law of `liggghts_inputs/hydrogel.in` with its parameters.
-#[derive(Debug, Clone, Copy)]
-pub struct Law {
-    /// The deck's `law` variable: 0 mc_advanced, 1 hertz, 2 standard MC.
-    pub law: &'static str,
-    pub gamma: f64,
-    pub mpr: f64,
-    /// The particles' Young's modulus [Pa] (the calibration's third parameter).
-    pub youngs_modulus: f64,
-    /// `geometryTolerance` of `mc_advanced` (0: exact).
-    pub geometry_tolerance: f64,
-    /// `updateEvery` of `mc_advanced` (1: exact).
-    pub update_every: u64,
-}
-
-impl Law {
-    pub const HERTZ: Law = Law {
-        law: "1",
-        gamma: 1.0,
-        mpr: 0.0,
-        youngs_modulus: E_HYDROGEL,
-        geometry_tolerance: 0.0,
-        update_every: 1,
-    };
-
-    pub fn standard(gamma: f64) -> Self {
-        Law { law: "2", gamma, mpr: 0.0, ..Self::HERTZ }
-    }
-
-    pub fn advanced(gamma: f64, mpr: f64) -> Self {
-        Law { law: "0", gamma, mpr, ..Self::HERTZ }
-    }
 }
 
 fn deck_vars(m: Law, nu: f64, s: &Setup, strokes: u32) -> Vec<(&'static str, String)> {
@@ -451,15 +386,15 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         );
         r.nrmse = (nu, he, se, ae);
         let file = format!("uniaxial_nu{nu}.png");
-        let line = |label: String, points: Curve, markers: bool| super::plot::Series {
+        let line = |label: String, points: Curve, markers: bool| crate::harness::plot::Series {
             label,
             points,
             markers,
             thin: false,
         };
-        super::plot::draw(
+        crate::harness::plot::draw(
             &opts.out.join(&file),
-            &super::plot::Chart {
+            &crate::harness::plot::Chart {
                 title: &format!("514 hydrogel spheres, second compression, ν = {nu}"),
                 x_label: "solid volume fraction φ",
                 y_label: "piston stress [Pa]",
@@ -496,9 +431,9 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
     // Fig. 4 analogue: NRMSE against ν.
     let pick = |k: usize| -> Curve { nrmse_rows.iter().map(|r| (r.0, 100.0 * [r.1, r.2, r.3][k])).collect() };
     let file = "uniaxial_nrmse_vs_nu.png";
-    super::plot::draw(
+    crate::harness::plot::draw(
         &opts.out.join(file),
-        &super::plot::Chart {
+        &crate::harness::plot::Chart {
             title: "NRMSE against the nonlocal reference (Fig. 4 analogue)",
             x_label: "Poisson ratio ν",
             y_label: "NRMSE [%]",
@@ -507,7 +442,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             series: ["hertz", "standard MC (γ_max)", "advanced MC"]
                 .iter()
                 .enumerate()
-                .map(|(k, l)| super::plot::Series {
+                .map(|(k, l)| crate::harness::plot::Series {
                     label: l.to_string(),
                     points: pick(k),
                     markers: true,
@@ -529,21 +464,4 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         markdown: md,
         wall_time_s: 0.0,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    /// The recorded calibration is built in: every row parses into a valid law, and a ν without a
-    /// row has none (the case then runs the App. B values only).
-    #[test]
-    fn recorded_calibration_parses() {
-        let rows = super::calibration_rows();
-        assert!(!rows.is_empty());
-        for (nu, gamma, mpr, e) in rows {
-            let law = super::calibrated(nu).expect("a row for its own ν");
-            assert_eq!((law.gamma, law.mpr, law.youngs_modulus), (gamma, mpr, e));
-            assert!((0.0..=0.5).contains(&nu) && gamma > 0.0 && mpr >= 0.0 && e > 0.0);
-        }
-        assert!(super::calibrated(0.123).is_none());
-    }
 }

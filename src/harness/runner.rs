@@ -105,15 +105,9 @@ pub fn run_liggghts(exe: &Path, deck: &str, vars: &[(&str, String)]) -> Result<D
         let tail: Vec<&str> = text.lines().rev().take(4).collect();
         return Err(format!("{} {deck} failed: {}", exe.display(), tail.join(" | ")));
     }
-    let (mut secs, mut psteps) = (0.0, 0.0);
-    for l in text.lines().filter(|l| l.starts_with("Loop time of")) {
-        let w: Vec<&str> = l.split_whitespace().collect();
-        let num = |i: usize| w.get(i).and_then(|s| s.parse::<f64>().ok()).unwrap_or(0.0);
-        secs += num(3);
-        psteps += num(8) * num(11);
-    }
+    let rate = crate::outputs::loop_totals(&text).map_or(0.0, |t| t.rate());
     let table = crate::outputs::read_ave_time(&scratch.0.join("out.txt"))?;
-    Ok(DeckRun { table, wall_time_s, particle_steps_per_s: psteps / secs.max(1e-12) })
+    Ok(DeckRun { table, wall_time_s, particle_steps_per_s: rate })
 }
 
 /// Linear interpolation of the points `(x, y)` (x increasing) at `x0`; `None` outside the range.

@@ -1,0 +1,353 @@
+//! The multi-contact pass (LIGGGHTS `fix multicontact/halfspace` pre_force): every particle's radius
+//! change at every one of its contacts from the previous step's normal forces (Eq. 2, capped by
+//! Eq. 3 where the material carries a cap), through [`crate::physics::contact_set`].
+
+use std::cell::RefCell;
+use std::sync::Mutex;
+
+use crate::physics::contact_set::{
+    loaded_threshold, radius_changes, ContactLoad, InfluenceCache, KeptInfluence, McParams,
+};
+use crate::physics::Material;
+use crate::team::{SplitMut, Team};
+
+use super::contacts::{PairHist, PairLoad, WallContact};
+use super::particles::Particles;
+use super::{StepError, World};
+
+/// What the multi-contact pass keeps between steps (no allocation in the loop).
+#[derive(Debug, Default)]
+pub(super) struct McState {
+    /// Step of the next full multi-contact pass under `mc_every`.
+    pub(super) mc_due: u64,
+    /// Neighbour builds at the last full multi-contact pass (a build renumbers the pairs).
+    pub(super) mc_builds: u64,
+    pub(super) mc_types: Vec<McType>,
+    pub(super) slot_start: Vec<u32>,
+    pub(super) slots: Vec<Slot>,
+    pub(super) slot_fill: Vec<u32>,
+    /// Radius change per slot, from this step's kernel pass.
+    pub(super) slot_dr: Vec<f64>,
+    /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
+    /// contact appeared or left, a pair entered or left the multi-contact set).
+    pub(super) slots_stale: bool,
+    /// Per pair: what this step's multi-contact pass reads (filled for pairs taking part).
+    pub(super) pair_loads: Vec<PairLoad>,
+    /// Geometry tolerance: the kept influence matrices, one per particle.
+    pub(super) mc_cache: Option<InfluenceCache>,
+    pub(super) pair_mc: Vec<bool>,
+}
+
+/// Per-type MC kernel parameters without the radius (filled in per particle).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct McType {
+    pub(super) material: Material,
+}
+
+/// Indirection from a particle to one of its contacts, for the multi-contact pass.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Slot {
+    PairI(u32),
+    PairJ(u32),
+    Wall(u32),
+}
+
+/// Particles per leaf of the threaded multi-contact pass.
+pub(super) const MC_GRAIN: usize = 64;
+
+/// Kernel calls, fallbacks to Hertz and influence-matrix recomputations of a multi-contact pass.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct McCounts {
+    pub(super) contacts: u64,
+    pub(super) fallbacks: u64,
+    pub(super) recomputed: u64,
+}
+
+impl World {
+    /// Per particle, the list of its multi-contact slots (pairs in pair order, then wall
+    /// contacts), as compressed rows. Rebuilt only when the pairs or wall contacts changed.
+    pub(super) fn build_slots(&mut self) {
+        let n = self.p.len();
+        self.multi.slot_start.clear();
+        self.multi.slot_start.resize(n + 1, 0);
+        for (pr, _) in self.contacts.pairs.iter().zip(&self.multi.pair_mc).filter(|(_, m)| **m) {
+            self.multi.slot_start[pr.i as usize + 1] += 1;
+            self.multi.slot_start[pr.j as usize + 1] += 1;
+        }
+        for c in &self.contacts.wc {
+            self.multi.slot_start[c.p as usize + 1] += 1;
+        }
+        for i in 0..n {
+            self.multi.slot_start[i + 1] += self.multi.slot_start[i];
+        }
+        let total = self.multi.slot_start[n] as usize;
+        self.multi.slots.clear();
+        self.multi.slots.resize(total, Slot::Wall(0));
+        self.multi.slot_fill.clear();
+        self.multi.slot_fill.extend_from_slice(&self.multi.slot_start[..n]);
+        for (k, pr) in self.contacts.pairs.iter().enumerate() {
+            if !self.multi.pair_mc[k] {
+                continue;
+            }
+            let (i, j) = (pr.i as usize, pr.j as usize);
+            self.multi.slots[self.multi.slot_fill[i] as usize] = Slot::PairI(k as u32);
+            self.multi.slot_fill[i] += 1;
+            self.multi.slots[self.multi.slot_fill[j] as usize] = Slot::PairJ(k as u32);
+            self.multi.slot_fill[j] += 1;
+        }
+        for (k, c) in self.contacts.wc.iter().enumerate() {
+            let i = c.p as usize;
+            self.multi.slots[self.multi.slot_fill[i] as usize] = Slot::Wall(k as u32);
+            self.multi.slot_fill[i] += 1;
+        }
+        self.multi.slots_stale = false;
+    }
+
+    /// Multi-contact pass (LIGGGHTS `fix multicontact/halfspace` pre_force): radius change of
+    /// every particle at every one of its contacts from the previous step's normal forces.
+    pub(super) fn multicontact(&mut self) -> Result<(), StepError> {
+        // Between updates under `mc_every` the radius changes of the last pass stand: pairs keep
+        // theirs by index (valid until the next neighbour build) and wall contacts by key
+        // (`wall_contacts::collect`).
+        if self.mc_every > 1
+            && self.step < self.multi.mc_due
+            && self.builds == self.multi.mc_builds
+            && self.contacts.pair_dr.len() == self.contacts.pairs.len()
+        {
+            return Ok(());
+        }
+        self.multi.mc_due = self.step.saturating_add(self.mc_every.max(1));
+        self.multi.mc_builds = self.builds;
+        self.mc_updates += 1;
+        let n = self.p.len();
+        let domain = self.domain.expect("domain checked in setup");
+        for c in &mut self.contacts.wc {
+            c.dr = 0.0;
+        }
+        if self.multi.pair_mc.len() != self.contacts.pairs.len() {
+            self.multi.pair_mc.clear();
+            self.multi.pair_mc.resize(self.contacts.pairs.len(), false);
+            self.multi.slots_stale = true;
+        }
+        if self.contacts.pair_hist.len() != self.contacts.pairs.len() {
+            // The closure started since the last neighbour build: every pair is new to it.
+            self.contacts.pair_hist.clear();
+            self.contacts.pair_hist.resize(self.contacts.pairs.len(), PairHist::NEW);
+        }
+        self.multi.pair_loads.resize(self.contacts.pairs.len(), PairLoad::default());
+        // Pairs outside the multi-contact set get no slot, hence no change.
+        self.contacts.pair_dr.clear();
+        self.contacts.pair_dr.resize(self.contacts.pairs.len(), [0.0; 2]);
+        let (p, types) = (&self.p, &self.multi.mc_types);
+        // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
+        let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
+        // One pass over the pairs (at large N they no longer fit in cache): reset the radius
+        // changes, decide who takes part, and give the kernel each taking part pair's contact
+        // points and previous force in a compact array, so its gather does not touch the pairs.
+        // A pair takes part if loaded, or close enough that radius growth could make it touch
+        // (gap below RECEIVER_GAP of the radii at the last evaluation; a pair moves far less than
+        // that in a step): far candidates would only cost kernel time. Contact points once per
+        // pair, both sides from one centre distance; as LIGGGHTS: the midpoint of the modified
+        // spheres' surfaces along the centre line when loaded, else each particle's own surface
+        // point.
+        let mut stale = false;
+        let taking_part = self.multi.pair_mc.iter_mut().zip(self.multi.pair_loads.iter_mut());
+        for ((pr, h), (m, load)) in self.contacts.pairs.iter().zip(&self.contacts.pair_hist).zip(taking_part)
+        {
+            let now = h.fn_prev > 0.0 || h.near;
+            if *m != now {
+                *m = now;
+                stale = true;
+            }
+            if !now {
+                continue;
+            }
+            let (a, b) = (pr.i as usize, pr.j as usize);
+            let mut xab = p.x[b] - p.x[a];
+            domain.minimum_image(&mut xab);
+            let len = xab.norm().max(1e-300);
+            load.points = if h.fn_prev > eps(a) {
+                let tmp = xab * ((h.ri_prev - h.rj_prev) * 0.5 / len);
+                [tmp + 0.5 * xab, tmp - 0.5 * xab]
+            } else {
+                [xab * (h.ri_prev / len), -xab * (h.rj_prev / len)]
+            };
+            load.force = h.fn_prev;
+        }
+        if stale || self.multi.slots_stale {
+            self.build_slots();
+        }
+        // The kernel particle by particle into one Δ per slot (threads on disjoint particle
+        // ranges when they pay), then Δ to the pairs and wall contacts.
+        self.multi.slot_dr.resize(self.multi.slots.len(), 0.0);
+        let threaded = n >= 2 * MC_GRAIN && self.threads().is_some();
+        let ctx = McCtx {
+            p: &self.p,
+            mc_types: &self.multi.mc_types,
+            slot_start: &self.multi.slot_start,
+            slots: &self.multi.slots,
+            pair_loads: &self.multi.pair_loads,
+            wc: &self.contacts.wc,
+            step: self.step,
+        };
+        let (tolerance, kept) = match self.multi.mc_cache.as_mut() {
+            Some(c) => {
+                let (t, k) = c.slots_mut(n);
+                (t, Some(k))
+            }
+            None => (0.0, None),
+        };
+        let counts = match self.blocks.team.as_ref().filter(|_| threaded) {
+            Some(team) => ctx.kernel_on(team, &mut self.multi.slot_dr, kept, tolerance)?,
+            None => ctx.kernel(0, n, &mut self.multi.slot_dr, kept, tolerance)?,
+        };
+        self.mc_kernel_contacts += counts.contacts;
+        self.mc_kernel_fallbacks += counts.fallbacks;
+        if let Some(c) = self.multi.mc_cache.as_mut() {
+            c.recomputed += counts.recomputed;
+        }
+        for (s, &d) in self.multi.slots.iter().zip(&self.multi.slot_dr) {
+            match *s {
+                Slot::PairI(k) => self.contacts.pair_dr[k as usize][0] = d,
+                Slot::PairJ(k) => self.contacts.pair_dr[k as usize][1] = d,
+                Slot::Wall(k) => self.contacts.wc[k as usize].dr = d,
+            }
+        }
+        Ok(())
+    }
+}
+
+thread_local! {
+    /// One particle's contact loads and fallback flags: per thread, grown to the largest contact
+    /// set seen and reused (no allocation in the step loop).
+    static MC_SCRATCH: RefCell<(Vec<ContactLoad>, Vec<bool>)> = RefCell::default();
+}
+
+/// Read-only view of what the multi-contact kernel pass needs (shared between threads).
+pub(super) struct McCtx<'a> {
+    pub(super) p: &'a Particles,
+    pub(super) mc_types: &'a [McType],
+    pub(super) slot_start: &'a [u32],
+    pub(super) slots: &'a [Slot],
+    pub(super) pair_loads: &'a [PairLoad],
+    pub(super) wc: &'a [WallContact],
+    pub(super) step: u64,
+}
+
+impl McCtx<'_> {
+    /// [`McCtx::kernel`] of all particles on the members of `team`, each on a consecutive range
+    /// of particles with about equal numbers of contacts (the kernel's cost grows with them).
+    /// Every particle's result is the one of a serial pass, and of several failures the lowest
+    /// particle's is reported (the lowest member's, whose range comes first).
+    pub(super) fn kernel_on(
+        &self,
+        team: &Team,
+        dr: &mut [f64],
+        kept: Option<&mut [KeptInfluence]>,
+        tolerance: f64,
+    ) -> Result<McCounts, StepError> {
+        let n = self.slot_start.len() - 1;
+        let (size, total) = (team.size(), self.slot_start[n] as usize);
+        debug_assert_eq!(self.slot_start[0], 0);
+        let cut = |k: usize| {
+            if k >= size {
+                n
+            } else {
+                self.slot_start[..n].partition_point(|&s| (s as usize) * size < k * total)
+            }
+        };
+        let (dr, kept) = (SplitMut::new(dr), kept.map(SplitMut::new));
+        let counts = Mutex::new(McCounts::default());
+        team.run(|k| {
+            let (lo, hi) = (cut(k), cut(k + 1));
+            let slots = self.slot_start[lo] as usize..self.slot_start[hi] as usize;
+            // SAFETY: `cut` does not decrease with k, so the members' particle ranges lo..hi are
+            // disjoint, and with them their slots and kept matrices.
+            let (d, kp) = unsafe { (dr.range(slots), kept.as_ref().map(|v| v.range(lo..hi))) };
+            let c = self.kernel(lo, hi, d, kp, tolerance)?;
+            let mut sum = counts.lock().unwrap_or_else(|p| p.into_inner());
+            sum.contacts += c.contacts;
+            sum.fallbacks += c.fallbacks;
+            sum.recomputed += c.recomputed;
+            Ok(())
+        })?;
+        Ok(counts.into_inner().unwrap_or_else(|p| p.into_inner()))
+    }
+
+    /// Radius changes of particles lo..hi into `dr` (exactly their slots), kept matrices in
+    /// `kept` (exactly those particles) under a geometry tolerance; of several failures the
+    /// lowest particle's is reported.
+    pub(super) fn kernel(
+        &self,
+        lo: usize,
+        hi: usize,
+        dr: &mut [f64],
+        kept: Option<&mut [KeptInfluence]>,
+        tolerance: f64,
+    ) -> Result<McCounts, StepError> {
+        MC_SCRATCH.with(|buf| {
+            let (loads, fb_buf) = &mut *buf.borrow_mut();
+            let mut counts = McCounts::default();
+            let mut kept = kept;
+            let base = self.slot_start[lo] as usize;
+            for i in lo..hi {
+                let (s0, s1) = (self.slot_start[i] as usize, self.slot_start[i + 1] as usize);
+                let out = &mut dr[s0 - base..s1 - base];
+                if s1 - s0 < 2 {
+                    out.fill(0.0);
+                    continue;
+                }
+                loads.clear();
+                loads.extend(self.slots[s0..s1].iter().map(|s| {
+                    let (point, force) = match *s {
+                        Slot::PairI(k) => {
+                            let l = &self.pair_loads[k as usize];
+                            (l.points[0], l.force)
+                        }
+                        Slot::PairJ(k) => {
+                            let l = &self.pair_loads[k as usize];
+                            (l.points[1], l.force)
+                        }
+                        Slot::Wall(k) => {
+                            let c = &self.wc[k as usize];
+                            (c.rel_prev, c.fn_prev)
+                        }
+                    };
+                    ContactLoad { point, force }
+                }));
+                let m = self.mc_types[self.p.typ[i]].material;
+                let params = McParams {
+                    radius: self.p.radius[i],
+                    youngs_modulus: m.youngs_modulus,
+                    poisson_ratio: m.poisson_ratio,
+                    gamma: m.gamma,
+                    cap: m.cap,
+                };
+                let nl = loads.len();
+                if fb_buf.len() < nl {
+                    fb_buf.resize(nl, false);
+                }
+                // The particle's slots are its contacts in order: Δ goes straight into them.
+                let fb = &mut fb_buf[..nl];
+                let res = match kept.as_deref_mut() {
+                    Some(k) => {
+                        if let Some(next) = k.get(i - lo + 1) {
+                            next.prefetch();
+                        }
+                        k[i - lo].radius_changes(tolerance, &params, loads, out, fb)
+                    }
+                    None => radius_changes(&params, loads, out, fb).map(|s| (s, false)),
+                };
+                let (summary, recomputed) = res.map_err(|e| StepError {
+                    step: self.step,
+                    particle: self.p.id[i],
+                    cause: format!("multi-contact kernel: {e}"),
+                })?;
+                counts.contacts += nl as u64;
+                counts.fallbacks += summary.fallbacks as u64;
+                counts.recomputed += u64::from(recomputed);
+            }
+            Ok(counts)
+        })
+    }
+}
