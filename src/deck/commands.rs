@@ -122,16 +122,18 @@ fn atom_modify(d: &mut Deck, a: &[&str]) -> R<()> {
 fn boundary(d: &mut Deck, a: &[&str]) -> R<()> {
     need(a, 4)?;
     for k in 0..3 {
+        d.shrink[k] = false;
         d.periodic[k] = match a[1 + k] {
             "p" => true,
             "f" => false,
-            // Shrink-wrapping moves the box faces with the particles: the engine's box is fixed.
-            s @ ("m" | "s") => {
-                return Err(unsupported(&format!(
-                    "boundary style {s} (shrink-wrapped boundaries need an engine whose box follows the particles; use f or p)"
-                )))
+            // Shrink-wrapped: the box grows with the particles, never below the created box (see
+            // `Deck::shrink_wrap`). `s` may shrink below it in LIGGGHTS; a box larger than the
+            // particles changes no force, only box-size outputs, so both are read the same way.
+            "m" | "s" => {
+                d.shrink[k] = true;
+                false
             }
-            other => return Err(unsupported(&format!("boundary style {other} (f or p)"))),
+            other => return Err(unsupported(&format!("boundary style {other} (f, p, m or s, one per axis)"))),
         };
     }
     Ok(())

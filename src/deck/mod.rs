@@ -175,6 +175,8 @@ struct Deck {
     /// `fix insert/pack` insertions waiting for the next run.
     insertion: fixes::insert::Insertion,
     periodic: [bool; 3],
+    /// Shrink-wrapped axes (`boundary m` or `s`): the box follows the particles.
+    shrink: [bool; 3],
     ntypes: usize,
     thermo_every: u64,
     thermo_cols: Vec<String>,
@@ -247,6 +249,7 @@ impl Deck {
             regions: HashMap::new(),
             insertion: Default::default(),
             periodic: [false; 3],
+            shrink: [false; 3],
             ntypes: 0,
             thermo_every: 0,
             thermo_cols: vec!["step".into(), "atoms".into(), "ke".into()],

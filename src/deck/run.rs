@@ -36,6 +36,27 @@ impl Deck {
         Ok(())
     }
 
+    /// `boundary m`/`s`: widens the box on shrink-wrapped axes so that every particle, with its
+    /// radius and the neighbour skin as margin, stays inside. The engine checks for lost particles
+    /// at list rebuilds, which come before a particle moves a skin; so a box kept a skin beyond
+    /// every particle after each step never loses one. It only grows, so it never falls below the
+    /// created box (LIGGGHTS' `m` minimum).
+    fn shrink_wrap(&mut self) {
+        if !self.shrink.iter().any(|&s| s) {
+            return;
+        }
+        let skin = self.world.skin;
+        let p = &self.world.p;
+        let Some(d) = self.world.domain.as_mut() else { return };
+        for a in (0..3).filter(|&a| self.shrink[a]) {
+            for i in 0..p.len() {
+                let m = p.radius[i] + skin;
+                d.lo[a] = d.lo[a].min(p.x[i][a] - m);
+                d.hi[a] = d.hi[a].max(p.x[i][a] + m);
+            }
+        }
+    }
+
     pub(super) fn run(&mut self, a: &[&str]) -> R<()> {
         if a.len() < 2 {
             return Err("run: missing N".into());
@@ -55,6 +76,7 @@ impl Deck {
             n as u64
         };
         self.insert_pending()?;
+        self.shrink_wrap();
         self.prepare()?;
         let warnings = self.world.setup()?;
         for wmsg in warnings {
@@ -94,6 +116,7 @@ impl Deck {
                 self.instability = Some(e);
                 m
             })?;
+            self.shrink_wrap();
             let last = self.world.step == end;
             if let Some(line) = self.end_of_step_outputs(last)? {
                 match &bar {
