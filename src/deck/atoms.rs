@@ -1,0 +1,207 @@
+//! Atoms: the box, `read_data`, `create_atoms single`, `set`, `velocity`.
+
+use super::*;
+
+impl Deck {
+    pub(super) fn set_box(&mut self, b: [f64; 6]) -> R<()> {
+        if self.world.domain.is_some() {
+            return Err("the simulation box already exists".into());
+        }
+        let lo = Vec3::new(b[0], b[2], b[4]);
+        let hi = Vec3::new(b[1], b[3], b[5]);
+        if (0..3).any(|k| hi[k].partial_cmp(&lo[k]) != Some(std::cmp::Ordering::Greater)) {
+            return Err("box bounds must have hi > lo".into());
+        }
+        self.world.domain = Some(Domain::new(lo, hi, self.periodic));
+        Ok(())
+    }
+
+    pub(super) fn read_data(&mut self, file: &str) -> R<()> {
+        let path = self.input_path(file);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| format!("cannot read data file {}: {e}", path.display()))?;
+        let mut b = [0.0; 6];
+        let mut natoms = 0usize;
+        let lines = text.lines().skip(1);
+        let mut section = "";
+        let mut vel_seen = false;
+        // Velocities name atoms by id: one map for the section (a search per line is quadratic).
+        let mut by_id = std::collections::HashMap::new();
+        for l in lines {
+            let l = strip_comment(l).trim();
+            if l.is_empty() {
+                continue;
+            }
+            let t: Vec<&str> = l.split_whitespace().collect();
+            match t.as_slice() {
+                [n, "atoms"] => natoms = int(n)? as usize,
+                [n, "atom", "types"] => self.ntypes = int(n)? as usize,
+                [lo, hi, "xlo", "xhi"] => (b[0], b[1]) = (num(lo)?, num(hi)?),
+                [lo, hi, "ylo", "yhi"] => (b[2], b[3]) = (num(lo)?, num(hi)?),
+                [lo, hi, "zlo", "zhi"] => (b[4], b[5]) = (num(lo)?, num(hi)?),
+                ["Atoms", ..] => {
+                    self.set_box(b)?;
+                    section = "Atoms";
+                }
+                ["Velocities"] => {
+                    section = "Velocities";
+                    vel_seen = true;
+                    by_id = self.world.p.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
+                }
+                [word, ..] if word.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) => {
+                    return Err(unsupported(&format!(
+                        "data file section or header \"{l}\" in {}",
+                        path.display()
+                    )));
+                }
+                _ => match section {
+                    "Atoms" => {
+                        if t.len() < 7 {
+                            return Err(format!(
+                                "{}: Atoms line needs id type diameter density x y z: \"{l}\"",
+                                path.display()
+                            ));
+                        }
+                        let id = int(t[0])?;
+                        let typ = int(t[1])? as usize;
+                        if typ < 1 || typ > self.ntypes {
+                            return Err(format!(
+                                "{}: atom {id} has type {typ} outside 1..{}",
+                                path.display(),
+                                self.ntypes
+                            ));
+                        }
+                        let x = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
+                        self.world.p.push(id, typ - 1, x, num(t[2])?, num(t[3])?);
+                        if t.len() >= 10 {
+                            let i = self.world.p.len() - 1;
+                            self.world.p.image[i] = [int(t[7])? as i32, int(t[8])? as i32, int(t[9])? as i32];
+                        }
+                    }
+                    "Velocities" => {
+                        if t.len() < 7 {
+                            return Err(format!(
+                                "{}: Velocities line needs id vx vy vz wx wy wz",
+                                path.display()
+                            ));
+                        }
+                        let id = int(t[0])?;
+                        let i = *by_id.get(&id).ok_or_else(|| format!("no atom with id {id}"))?;
+                        self.world.p.v[i] = Vec3::new(num(t[1])?, num(t[2])?, num(t[3])?);
+                        self.world.p.omega[i] = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
+                    }
+                    _ => return Err(format!("{}: data line outside a section: \"{l}\"", path.display())),
+                },
+            }
+        }
+        if self.world.p.len() != natoms {
+            return Err(format!(
+                "{}: header says {natoms} atoms, found {}",
+                path.display(),
+                self.world.p.len()
+            ));
+        }
+        self.say(&format!("  {} atoms{}", natoms, if vel_seen { ", velocities read" } else { "" }));
+        Ok(())
+    }
+
+    pub(super) fn index_of(&self, id: i64) -> R<usize> {
+        self.world.p.id.iter().position(|&x| x == id).ok_or_else(|| format!("no atom with id {id}"))
+    }
+
+    pub(super) fn create_atoms(&mut self, a: &[&str]) -> R<()> {
+        if a.len() < 6 || a[2] != "single" {
+            return Err(unsupported(
+                "create_atoms style (only 'create_atoms TYPE single x y z [units box]')",
+            ));
+        }
+        if a.len() > 6 && !(a.len() == 8 && a[6] == "units" && a[7] == "box") {
+            return Err(unsupported("create_atoms keyword"));
+        }
+        let typ = int(a[1])? as usize;
+        if typ < 1 || typ > self.ntypes {
+            return Err(format!("atom type {typ} outside 1..{}", self.ntypes));
+        }
+        let x = Vec3::new(num(a[3])?, num(a[4])?, num(a[5])?);
+        let id = self.world.p.id.iter().copied().max().unwrap_or(0) + 1;
+        // LIGGGHTS default for a new sphere: diameter 1, density 1 (set changes it).
+        self.world.p.push(id, typ - 1, x, 1.0, 1.0);
+        Ok(())
+    }
+
+    pub(super) fn set(&mut self, a: &[&str]) -> R<()> {
+        if a.len() < 5 {
+            return Err("set: expected 'set atom|type ID keyword value …'".into());
+        }
+        let sel: Vec<usize> = match a[1] {
+            "atom" if a[2] == "*" => (0..self.world.p.len()).collect(),
+            "atom" => vec![self.index_of(int(a[2])?)?],
+            "type" => {
+                let t = int(a[2])? as usize;
+                (0..self.world.p.len()).filter(|&i| self.world.p.typ[i] + 1 == t).collect()
+            }
+            other => return Err(unsupported(&format!("set style {other}"))),
+        };
+        let mut k = 3;
+        while k + 1 < a.len() + 1 && k < a.len() {
+            let v = num(a.get(k + 1).ok_or("set: missing value")?)?;
+            for &i in &sel {
+                match a[k] {
+                    "diameter" => self.world.p.set_size(i, Some(v), None),
+                    "density" => self.world.p.set_size(i, None, Some(v)),
+                    "vx" => self.world.p.v[i].x = v,
+                    "vy" => self.world.p.v[i].y = v,
+                    "vz" => self.world.p.v[i].z = v,
+                    "omegax" => self.world.p.omega[i].x = v,
+                    "omegay" => self.world.p.omega[i].y = v,
+                    "omegaz" => self.world.p.omega[i].z = v,
+                    other => return Err(unsupported(&format!("set keyword {other}"))),
+                }
+            }
+            k += 2;
+        }
+        Ok(())
+    }
+
+    pub(super) fn velocity(&mut self, a: &[&str]) -> R<()> {
+        if a.get(2) == Some(&"ramp") {
+            // `velocity all ramp vx VLO VHI y YLO YHI [sum yes|no] [units box]` (LAMMPS): the
+            // streaming profile of a Lees–Edwards shear.
+            if a.len() < 9 || a[1] != "all" || a[3] != "vx" || a[6] != "y" {
+                return Err(unsupported(
+                    "velocity ramp form (only 'velocity all ramp vx VLO VHI y YLO YHI')",
+                ));
+            }
+            let (vlo, vhi, ylo, yhi) = (num(a[4])?, num(a[5])?, num(a[7])?, num(a[8])?);
+            if yhi <= ylo || !(yhi - ylo).is_finite() {
+                return Err(format!("velocity ramp: YHI ({yhi}) must exceed YLO ({ylo})"));
+            }
+            let mut sum = false;
+            let mut k = 9;
+            while k < a.len() {
+                match (a[k], a.get(k + 1).copied()) {
+                    ("sum", Some(v @ ("yes" | "no"))) => sum = v == "yes",
+                    ("units", Some("box")) => {}
+                    _ => return Err(unsupported(&format!("velocity ramp keyword {}", a[k]))),
+                }
+                k += 2;
+            }
+            let p = &mut self.world.p;
+            for i in 0..p.len() {
+                let s = ((p.x[i].y - ylo) / (yhi - ylo)).clamp(0.0, 1.0);
+                let v = vlo + s * (vhi - vlo);
+                p.v[i].x = if sum { p.v[i].x + v } else { v };
+            }
+            return Ok(());
+        }
+        if a.len() < 6 || a[1] != "all" || a[2] != "set" {
+            return Err(unsupported("velocity form (only 'velocity all set vx vy vz [units box]')"));
+        }
+        if a.len() > 6 && !(a.len() == 8 && a[6] == "units" && a[7] == "box") {
+            return Err(unsupported("velocity keyword"));
+        }
+        let v = Vec3::new(num(a[3])?, num(a[4])?, num(a[5])?);
+        self.world.p.v.iter_mut().for_each(|x| *x = v);
+        Ok(())
+    }
+}

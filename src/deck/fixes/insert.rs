@@ -1,0 +1,472 @@
+//! Particle insertion as LIGGGHTS 3.8 documents it: `fix particletemplate/sphere` (one kind of
+//! particle), `fix particledistribution/discrete` (templates with weights) and `fix insert/pack`
+//! (fill a region once, at the start of the next run, with non-overlapping particles).
+//!
+//! Placement is random rejection sampling from the fix's seed, sequential and so the same on any
+//! thread count. Larger particles are placed first (as LIGGGHTS does: they are the hardest to fit).
+//! A target the region cannot hold stops the run with an error instead of LIGGGHTS' warning and
+//! short insertion: a packing with fewer particles than the deck asks for is a different packing.
+
+use std::collections::HashMap;
+use std::f64::consts::PI;
+
+use crate::deck::regions::Region;
+use crate::deck::*;
+use crate::rng::SplitMix64;
+
+/// Templates, distributions and the insertions waiting for the next run.
+#[derive(Debug, Default)]
+pub(in crate::deck) struct Insertion {
+    templates: HashMap<String, Template>,
+    distributions: HashMap<String, Distribution>,
+    pending: Vec<Pack>,
+}
+
+#[derive(Debug, Clone)]
+struct Template {
+    /// 0-based atom type.
+    typ: usize,
+    density: f64,
+    radius: Radius,
+    seed: u64,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Radius {
+    Constant(f64),
+    /// Normal (mean, standard deviation); draws ≤ 0 are drawn again (σ ≤ μ/3 keeps that rare).
+    Gaussian(f64, f64),
+    /// Uniform on [min, max].
+    Uniform(f64, f64),
+}
+
+impl Radius {
+    fn draw(&self, rng: &mut SplitMix64) -> f64 {
+        match *self {
+            Radius::Constant(r) => r,
+            Radius::Uniform(a, b) => a + (b - a) * rng.uniform(),
+            Radius::Gaussian(mu, s) => loop {
+                let r = mu + s * rng.normal();
+                if r > 0.0 {
+                    break r;
+                }
+            },
+        }
+    }
+
+    /// Mean of r³ (for the expected particle volume and mass).
+    fn mean_cube(&self) -> f64 {
+        match *self {
+            Radius::Constant(r) => r * r * r,
+            Radius::Uniform(a, b) if b > a => (b.powi(4) - a.powi(4)) / (4.0 * (b - a)),
+            Radius::Uniform(a, _) => a * a * a,
+            Radius::Gaussian(mu, s) => mu * mu * mu + 3.0 * mu * s * s,
+        }
+    }
+}
+
+impl Template {
+    fn mean_volume(&self) -> f64 {
+        4.0 / 3.0 * PI * self.radius.mean_cube()
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Distribution {
+    seed: u64,
+    /// Template IDs with their number fractions (summing to 1).
+    parts: Vec<(String, f64)>,
+}
+
+#[derive(Debug, Clone)]
+enum Target {
+    Count(usize),
+    VolumeFraction(f64),
+    Mass(f64),
+}
+
+#[derive(Debug, Clone)]
+struct Pack {
+    /// `fix ID insert/pack (line N)`, for messages at the run that inserts.
+    label: String,
+    seed: u64,
+    dist: String,
+    region: Region,
+    target: Target,
+    all_in: bool,
+    exact: bool,
+    maxattempt: usize,
+    vel: Vec3,
+    omega: Vec3,
+}
+
+/// A seed as LIGGGHTS asks for it (a whole number; LIGGGHTS wants a prime > 10000, which only
+/// matters to its own generator).
+fn seed(s: &str, what: &str) -> R<u64> {
+    s.parse::<u64>().map_err(|_| format!("{what}: seed must be a whole number >= 0, got '{s}'"))
+}
+
+fn positive(s: &str, what: &str) -> R<f64> {
+    let v = num(s)?;
+    if !(v > 0.0 && v.is_finite()) {
+        return Err(format!("{what} must be > 0, got {s}"));
+    }
+    Ok(v)
+}
+
+impl Deck {
+    /// `fix ID group particletemplate/sphere SEED atom_type T density constant RHO radius STYLE …`
+    /// with STYLE `constant R`, `gaussian MU SIGMA` or `uniform MIN MAX`.
+    pub(in crate::deck) fn particle_template(&mut self, a: &[&str]) -> R<FixKind> {
+        let what = format!("fix {} particletemplate/sphere", a[1]);
+        let seed = seed(a.get(4).ok_or_else(|| format!("{what}: expected a seed"))?, &what)?;
+        let (mut typ, mut density, mut radius) = (None, None, None);
+        let mut k = 5;
+        let arg = |k: usize| a.get(k).copied().ok_or_else(|| format!("{what}: {} needs a value", a[k - 1]));
+        while k < a.len() {
+            match a[k] {
+                "atom_type" => {
+                    let t = int(arg(k + 1)?)?;
+                    if t < 1 || (self.ntypes > 0 && t as usize > self.ntypes) {
+                        return Err(format!("{what}: atom_type {t} outside 1..{}", self.ntypes));
+                    }
+                    typ = Some(t as usize - 1);
+                    k += 2;
+                }
+                "density" => {
+                    if arg(k + 1)? != "constant" {
+                        return Err(unsupported(&format!("{what}: density style {} (constant)", a[k + 1])));
+                    }
+                    density = Some(positive(arg(k + 2)?, &format!("{what}: density"))?);
+                    k += 3;
+                }
+                "radius" => {
+                    let k0 = k;
+                    let p = |j: usize| positive(arg(k0 + j)?, &format!("{what}: radius"));
+                    radius = Some(match arg(k0 + 1)? {
+                        "constant" => {
+                            k += 3;
+                            Radius::Constant(p(2)?)
+                        }
+                        "gaussian" => {
+                            let (mu, sigma) = (p(2)?, num(arg(k0 + 3)?)?);
+                            if !(0.0..=mu / 3.0).contains(&sigma) {
+                                return Err(format!(
+                                    "{what}: radius gaussian standard deviation must be in [0, mean/3] (no radius <= 0 in practice), got {sigma}"
+                                ));
+                            }
+                            k += 4;
+                            Radius::Gaussian(mu, sigma)
+                        }
+                        "uniform" => {
+                            let (lo, hi) = (p(2)?, p(3)?);
+                            if hi < lo {
+                                return Err(format!("{what}: radius uniform max {hi} below min {lo}"));
+                            }
+                            k += 4;
+                            Radius::Uniform(lo, hi)
+                        }
+                        other => {
+                            return Err(unsupported(&format!(
+                                "{what}: radius style {other} (constant, gaussian or uniform)"
+                            )))
+                        }
+                    });
+                }
+                "relative" if a.get(k + 1) == Some(&"no") => k += 2,
+                "volume_limit" => {
+                    positive(arg(k + 1)?, &format!("{what}: volume_limit"))?;
+                    k += 2;
+                }
+                other => return Err(unsupported(&format!("{what} keyword {other}"))),
+            }
+        }
+        let t = Template {
+            typ: typ.ok_or_else(|| format!("{what}: atom_type is required"))?,
+            density: density.ok_or_else(|| format!("{what}: density is required"))?,
+            radius: radius.ok_or_else(|| format!("{what}: radius is required"))?,
+            seed,
+        };
+        self.insertion.templates.insert(a[1].into(), t);
+        Ok(FixKind::Property)
+    }
+
+    /// `fix ID group particledistribution/discrete[/massbased|/numberbased] SEED N T1 W1 … TN WN`.
+    pub(in crate::deck) fn particle_distribution(&mut self, a: &[&str]) -> R<FixKind> {
+        let what = format!("fix {} {}", a[1], a[3]);
+        let massbased = a[3] != "particledistribution/discrete/numberbased";
+        let seed = seed(a.get(4).ok_or_else(|| format!("{what}: expected SEED N T1 W1 …"))?, &what)?;
+        let n = int(a.get(5).ok_or_else(|| format!("{what}: expected SEED N T1 W1 …"))?)?;
+        if n < 1 || a.len() != 6 + 2 * n as usize {
+            return Err(format!("{what}: expected {n} template/weight pairs after N, got {} words", a.len() - 6));
+        }
+        let mut parts = Vec::new();
+        for j in 0..n as usize {
+            let (id, w) = (a[6 + 2 * j], a[7 + 2 * j]);
+            let t = self
+                .insertion
+                .templates
+                .get(id)
+                .ok_or_else(|| format!("{what}: {id} is not a particletemplate/sphere fix"))?;
+            let w = num(w)?;
+            if !(w > 0.0 && w <= 1.0) {
+                return Err(format!("{what}: weight of {id} must be in (0, 1], got {w}"));
+            }
+            // Mass fractions become number fractions through each template's mean mass.
+            let per = if massbased { w / (t.density * t.mean_volume()) } else { w };
+            parts.push((id.to_string(), w, per));
+        }
+        let sum: f64 = parts.iter().map(|p| p.1).sum();
+        // LIGGGHTS renormalises with a warning; a typo in a fraction is caught here instead.
+        if (sum - 1.0).abs() > 1e-6 {
+            return Err(format!("{what}: the weights sum to {sum}, not 1"));
+        }
+        let total: f64 = parts.iter().map(|p| p.2).sum();
+        let parts = parts.into_iter().map(|(id, _, per)| (id, per / total)).collect();
+        self.insertion.distributions.insert(a[1].into(), Distribution { seed, parts });
+        Ok(FixKind::Property)
+    }
+
+    /// `fix ID group insert/pack seed S distributiontemplate D [general keywords] region R` and one
+    /// of `particles_in_region N`, `volumefraction_region F`, `mass_in_region M`.
+    pub(in crate::deck) fn insert_pack(&mut self, a: &[&str]) -> R<FixKind> {
+        let what = format!("fix {} insert/pack", a[1]);
+        let label = format!("{what} (line {})", self.line_no);
+        let (mut s, mut dist, mut region, mut target) = (None, None, None, None);
+        let (mut all_in, mut exact, mut maxattempt) = (false, true, 50usize);
+        let (mut vel, mut omega) = (Vec3::zeros(), Vec3::zeros());
+        let mut k = 4;
+        let arg = |j: usize| a.get(j).copied().ok_or_else(|| format!("{what}: {} needs a value", a[j - 1]));
+        let vec3 = |j: usize| -> R<Vec3> { Ok(Vec3::new(num(arg(j)?)?, num(arg(j + 1)?)?, num(arg(j + 2)?)?)) };
+        let yes_no = |v: &str, key: &str| match v {
+            "yes" => Ok(true),
+            "no" => Ok(false),
+            _ => Err(format!("{what}: {key} must be yes or no, got '{v}'")),
+        };
+        while k < a.len() {
+            let v = arg(k + 1)?;
+            k += 2;
+            match a[k - 2] {
+                "seed" => s = Some(seed(v, &what)?),
+                "distributiontemplate" => {
+                    if !self.insertion.distributions.contains_key(v) {
+                        return Err(format!("{what}: {v} is not a particledistribution/discrete fix"));
+                    }
+                    dist = Some(v.to_string());
+                }
+                "region" => {
+                    region = Some(self.regions.get(v).cloned().ok_or_else(|| format!("{what}: unknown region {v}"))?)
+                }
+                "particles_in_region" => {
+                    let n = int(v)?;
+                    if n < 1 {
+                        return Err(format!("{what}: particles_in_region must be >= 1, got {v}"));
+                    }
+                    target = Some(Target::Count(n as usize));
+                }
+                "volumefraction_region" => {
+                    let f = num(v)?;
+                    if !(f > 0.0 && f < 1.0) {
+                        return Err(format!("{what}: volumefraction_region must be in (0, 1), got {v}"));
+                    }
+                    target = Some(Target::VolumeFraction(f));
+                }
+                "mass_in_region" => target = Some(Target::Mass(positive(v, &format!("{what}: mass_in_region"))?)),
+                "insert_every" if v == "once" => {}
+                "insert_every" => {
+                    return Err(unsupported(&format!("{what}: insert_every {v} (only once: periodic insertion)")))
+                }
+                "overlapcheck" if v == "yes" => {}
+                "overlapcheck" => return Err(unsupported(&format!("{what}: overlapcheck {v} (only yes)"))),
+                "all_in" => all_in = yes_no(v, "all_in")?,
+                "random_distribute" => {
+                    exact = match v {
+                        "exact" => true,
+                        "uncorrelated" => false,
+                        _ => return Err(format!("{what}: random_distribute must be exact or uncorrelated, got '{v}'")),
+                    }
+                }
+                "maxattempt" => {
+                    let m = int(v)?;
+                    if m < 1 {
+                        return Err(format!("{what}: maxattempt must be >= 1, got {v}"));
+                    }
+                    maxattempt = m as usize;
+                }
+                "vel" if v == "constant" => {
+                    vel = vec3(k)?;
+                    k += 3;
+                }
+                "omega" if v == "constant" => {
+                    omega = vec3(k)?;
+                    k += 3;
+                }
+                // Output and parallel bookkeeping; the region volume is computed exactly.
+                "verbose" | "compress_tags" | "check_dist_from_subdomain_border" => {
+                    yes_no(v, a[k - 2])?;
+                }
+                "ntry_mc" => {
+                    int(v)?;
+                }
+                other => return Err(unsupported(&format!("{what} keyword {other}"))),
+            }
+        }
+        let pack = Pack {
+            label,
+            seed: s.ok_or_else(|| format!("{what}: seed is required"))?,
+            dist: dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
+            region: region.ok_or_else(|| format!("{what}: region is required"))?,
+            target: target.ok_or_else(|| {
+                format!("{what}: one of particles_in_region, volumefraction_region, mass_in_region is required")
+            })?,
+            all_in,
+            exact,
+            maxattempt,
+            vel,
+            omega,
+        };
+        self.insertion.pending.push(pack);
+        Ok(FixKind::Property)
+    }
+
+    /// Runs the insertions waiting for this run (at its start, as LIGGGHTS inserts on the first step).
+    pub(in crate::deck) fn insert_pending(&mut self) -> R<()> {
+        for pack in std::mem::take(&mut self.insertion.pending) {
+            let n = self.insert(&pack).map_err(|e| format!("{}: {e}", pack.label))?;
+            self.say(&format!("INFO: {}: inserted {n} particles", pack.label));
+        }
+        Ok(())
+    }
+
+    fn insert(&mut self, pack: &Pack) -> R<usize> {
+        let dom = self.world.domain.ok_or("insertion before the simulation box exists")?;
+        let (lo, hi) = pack.region.bounds();
+        if (0..3).any(|k| lo[k] < dom.lo[k] || hi[k] > dom.hi[k]) {
+            return Err("the region reaches outside the simulation box".into());
+        }
+        let dist = &self.insertion.distributions[&pack.dist];
+        let templates: Vec<Template> = dist.parts.iter().map(|(id, _)| self.insertion.templates[id].clone()).collect();
+        let frac: Vec<f64> = dist.parts.iter().map(|p| p.1).collect();
+        // What is already in the region counts towards the target.
+        let p = &self.world.p;
+        let inside: Vec<usize> = (0..p.len()).filter(|&i| pack.region.holds(&p.x[i], 0.0)).collect();
+        let mean_vol: f64 = templates.iter().zip(&frac).map(|(t, f)| f * t.mean_volume()).sum();
+        let mean_mass: f64 = templates.iter().zip(&frac).map(|(t, f)| f * t.density * t.mean_volume()).sum();
+        let want = match pack.target {
+            Target::Count(n) => n as f64 - inside.len() as f64,
+            Target::VolumeFraction(f) => {
+                let have: f64 = inside.iter().map(|&i| 4.0 / 3.0 * PI * p.radius[i].powi(3)).sum();
+                (f * pack.region.volume() - have) / mean_vol
+            }
+            Target::Mass(m) => (m - inside.iter().map(|&i| p.mass[i]).sum::<f64>()) / mean_mass,
+        };
+        let n = want.round().max(0.0) as usize;
+        // Which template each particle comes from: exact shares (largest remainders), or each
+        // drawn on its own.
+        let mut pick = SplitMix64(dist.seed ^ pack.seed.rotate_left(32));
+        let mut counts = vec![0usize; templates.len()];
+        if pack.exact {
+            let raw: Vec<f64> = frac.iter().map(|f| f * n as f64).collect();
+            for (c, r) in counts.iter_mut().zip(&raw) {
+                *c = r.floor() as usize;
+            }
+            let mut order: Vec<usize> = (0..raw.len()).collect();
+            order.sort_by(|&x, &y| (raw[y] - raw[y].floor()).total_cmp(&(raw[x] - raw[x].floor())).then(x.cmp(&y)));
+            let short = n - counts.iter().sum::<usize>();
+            for &j in order.iter().take(short) {
+                counts[j] += 1;
+            }
+        } else {
+            for _ in 0..n {
+                let u = pick.uniform();
+                let mut acc = 0.0;
+                let j = frac.iter().position(|f| {
+                    acc += f;
+                    u < acc
+                });
+                counts[j.unwrap_or(frac.len() - 1)] += 1;
+            }
+        }
+        let mut new: Vec<(f64, usize)> = Vec::with_capacity(n);
+        for (j, t) in templates.iter().enumerate() {
+            let mut rng = SplitMix64(t.seed ^ pack.seed);
+            new.extend((0..counts[j]).map(|_| (t.radius.draw(&mut rng), j)));
+        }
+        // Largest first; ties keep template order (a stable sort).
+        new.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let rmax = new.iter().map(|x| x.0).chain(p.radius.iter().copied()).fold(0.0, f64::max);
+        let mut grid = Grid::new(2.0 * rmax);
+        for i in 0..p.len() {
+            grid.add(p.x[i], p.radius[i]);
+        }
+        let mut rng = SplitMix64(pack.seed);
+        let mut id = p.id.iter().copied().max().unwrap_or(0);
+        for (placed, &(r, j)) in new.iter().enumerate() {
+            let margin = if pack.all_in { r } else { 0.0 };
+            let mut at = None;
+            for _ in 0..pack.maxattempt {
+                let x = Vec3::new(
+                    lo.x + margin + (hi.x - lo.x - 2.0 * margin).max(0.0) * rng.uniform(),
+                    lo.y + margin + (hi.y - lo.y - 2.0 * margin).max(0.0) * rng.uniform(),
+                    lo.z + margin + (hi.z - lo.z - 2.0 * margin).max(0.0) * rng.uniform(),
+                );
+                if pack.region.holds(&x, margin) && !grid.overlaps(x, r) {
+                    at = Some(x);
+                    break;
+                }
+            }
+            let Some(x) = at else {
+                return Err(format!(
+                    "the region has no room: placed {placed} of {n} particles, then {} random tries found no free place for one of radius {r:e} m (lower the target or enlarge the region)",
+                    pack.maxattempt
+                ));
+            };
+            grid.add(x, r);
+            id += 1;
+            let t = &templates[j];
+            self.world.p.push(id, t.typ, x, 2.0 * r, t.density);
+            let i = self.world.p.len() - 1;
+            self.world.p.v[i] = pack.vel;
+            self.world.p.omega[i] = pack.omega;
+        }
+        Ok(n)
+    }
+}
+
+/// Spheres hashed into cubic cells no smaller than the largest diameter: an overlap can only be
+/// with a sphere in one of the 27 cells around a point.
+struct Grid {
+    cell: f64,
+    cells: HashMap<[i64; 3], Vec<(Vec3, f64)>>,
+}
+
+impl Grid {
+    fn new(cell: f64) -> Self {
+        Grid { cell: cell.max(f64::MIN_POSITIVE), cells: HashMap::new() }
+    }
+
+    fn key(&self, x: Vec3) -> [i64; 3] {
+        [(x.x / self.cell).floor() as i64, (x.y / self.cell).floor() as i64, (x.z / self.cell).floor() as i64]
+    }
+
+    fn add(&mut self, x: Vec3, r: f64) {
+        let k = self.key(x);
+        self.cells.entry(k).or_default().push((x, r));
+    }
+
+    fn overlaps(&self, x: Vec3, r: f64) -> bool {
+        let k = self.key(x);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = self.cells.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        if v.iter().any(|(y, s)| (x - y).norm() < r + s) {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}

@@ -1,0 +1,140 @@
+//! `fix mesh/surface[/stress]` and `fix wall/gran` (primitive planes and meshes).
+
+use crate::deck::*;
+
+impl Deck {
+    pub(in crate::deck) fn mesh_index(&self, fix_id: &str) -> R<usize> {
+        match self.fixes.iter().find(|(n, _)| n == fix_id) {
+            Some((_, FixKind::MeshSurface(m))) => Ok(*m),
+            _ => Err(format!("{fix_id} is not a mesh/surface fix")),
+        }
+    }
+
+    pub(in crate::deck) fn mesh_surface(&mut self, a: &[&str]) -> R<FixKind> {
+        let mut file = None;
+        let mut wall_type = None;
+        let mut ops: Vec<(&str, Vec<f64>)> = Vec::new();
+        let mut k = 4;
+        while k < a.len() {
+            match a[k] {
+                "file" => {
+                    file = Some(a.get(k + 1).ok_or("mesh: missing file name")?.to_string());
+                    k += 2;
+                }
+                "type" => {
+                    wall_type = Some(int(a.get(k + 1).ok_or("mesh: missing type")?)? as usize);
+                    k += 2;
+                }
+                "move" => {
+                    let v =
+                        (1..=3).map(|d| num(a.get(k + d).ok_or("mesh move: 3 values")?)).collect::<R<_>>()?;
+                    ops.push(("move", v));
+                    k += 4;
+                }
+                "rotate" => {
+                    if a.get(k + 1) != Some(&"axis") || a.get(k + 5) != Some(&"angle") {
+                        return Err("mesh rotate: expected 'rotate axis X Y Z angle DEGREES'".into());
+                    }
+                    let v = [2, 3, 4, 6]
+                        .iter()
+                        .map(|d| num(a.get(k + d).ok_or("mesh rotate: 4 values")?))
+                        .collect::<R<_>>()?;
+                    ops.push(("rotate", v));
+                    k += 7;
+                }
+                "scale" => {
+                    ops.push(("scale", vec![num(a.get(k + 1).ok_or("mesh scale: value")?)?]));
+                    k += 2;
+                }
+                "stress" if matches!(a.get(k + 1), Some(&"on") | Some(&"off")) => k += 2,
+                "verbose" | "heal" if a.get(k + 1).is_some() => k += 2,
+                other => return Err(unsupported(&format!("fix {} keyword {other}", a[3]))),
+            }
+        }
+        let file = file.ok_or("mesh/surface: 'file' is required")?;
+        let t = wall_type.ok_or("mesh/surface: 'type' is required")?;
+        if t < 1 || (self.ntypes > 0 && t > self.ntypes) {
+            return Err(format!("mesh/surface: type {t} outside 1..{}", self.ntypes));
+        }
+        let raw = crate::engine::mesh::read_stl(&self.input_path(&file))?;
+        let mut m = Mesh::new(a[1], t - 1, raw)?;
+        for (op, v) in ops {
+            match op {
+                "move" => m.translate(&Vec3::new(v[0], v[1], v[2])),
+                "rotate" => m.rotate(&Vec3::new(v[0], v[1], v[2]), v[3])?,
+                _ => m.scale(v[0]),
+            }
+        }
+        m.stress = a[3] == "mesh/surface/stress";
+        self.world.meshes.push(m);
+        Ok(FixKind::MeshSurface(self.world.meshes.len() - 1))
+    }
+
+    pub(in crate::deck) fn wall_gran(&mut self, a: &[&str]) -> R<FixKind> {
+        let (mut m, mut k) = Self::gran_model(a, 4)?;
+        let geom = match a.get(k) {
+            Some(&"primitive") => {
+                if a.len() < k + 5 || a[k + 1] != "type" {
+                    return Err("wall/gran primitive: expected 'type T xplane|yplane|zplane POS'".into());
+                }
+                let t = int(a[k + 2])? as usize;
+                let axis = match a[k + 3] {
+                    "xplane" => 0,
+                    "yplane" => 1,
+                    "zplane" => 2,
+                    other => return Err(unsupported(&format!("primitive wall {other}"))),
+                };
+                let pos = num(a[k + 4])?;
+                k += 5;
+                if t < 1 || (self.ntypes > 0 && t > self.ntypes) {
+                    return Err(format!("wall type {t} outside 1..{}", self.ntypes));
+                }
+                WallGeom::Plane(PlaneWall { axis, pos, wall_type: t - 1 })
+            }
+            Some(&"mesh") => {
+                if a.get(k + 1) != Some(&"n_meshes") || a.get(k + 3) != Some(&"meshes") {
+                    return Err("wall/gran mesh: expected 'n_meshes N meshes ID…'".into());
+                }
+                let n = int(a.get(k + 2).ok_or("n_meshes value")?)? as usize;
+                let mut list = Vec::new();
+                for j in 0..n {
+                    list.push(
+                        self.mesh_index(a.get(k + 4 + j).ok_or("wall/gran: fewer mesh IDs than n_meshes")?)?,
+                    );
+                }
+                k += 4 + n;
+                WallGeom::Meshes(list)
+            }
+            _ => return Err("wall/gran: expected 'primitive' or 'mesh'".into()),
+        };
+        // Model settings may also follow the geometry (LIGGGHTS accepts them at the end of the line).
+        while k < a.len() {
+            if !m.setting(a[k], a.get(k + 1).copied())? {
+                return Err(unsupported(&format!("wall/gran keyword {}", a[k])));
+            }
+            k += 2;
+        }
+        m.check()?;
+        // The wall runs the pair style's model: the same law and sub-models. The pair style's
+        // multi-contact pass serves the walls too, so a wall may repeat its mprTest,
+        // geometryTolerance and updateEvery but not give other values (they would be ignored);
+        // pairRadii concerns pairs only.
+        let Some(p) = &self.pair else { return Err("fix wall/gran before pair_style gran".into()) };
+        if (&p.model, &p.tangential, p.surface_mc) != (&m.model, &m.tangential, m.surface_mc) {
+            return Err(unsupported("a wall model different from the pair model"));
+        }
+        let given = |key: &str| a.iter().rposition(|w| *w == key).and_then(|i| a.get(i + 1));
+        let agrees = [
+            ("mprTest", p.mpr_test == m.mpr_test),
+            ("geometryTolerance", p.geometry_tolerance.unwrap_or(0.0) == m.geometry_tolerance.unwrap_or(0.0)),
+            ("updateEvery", p.update_every.unwrap_or(1) == m.update_every.unwrap_or(1)),
+        ];
+        for (key, same) in agrees {
+            if let (Some(x), false) = (given(key), same) {
+                return Err(format!("wall/gran {key} {x} differs from the pair style's"));
+            }
+        }
+        self.world.walls.push(WallFix { name: a[1].into(), geom });
+        Ok(FixKind::Wall(self.world.walls.len() - 1))
+    }
+}

@@ -1,0 +1,211 @@
+//! `pair_style gran` (and the model part of `fix wall/gran`), and the materials and contact
+//! closure built from the `fix property/global` values when a run starts.
+
+use super::*;
+
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct GranModel {
+    pub(super) model: String,
+    pub(super) tangential: String,
+    pub(super) surface_mc: bool,
+    pub(super) mpr_test: MprTest,
+    /// `pairRadii stock`: pairs with LIGGGHTS's radius convention (see docs/dem.md).
+    pub(super) stock_pair_radii: bool,
+    /// `geometryTolerance TOL` (mc_advanced): see `World::mc_geometry_tolerance`.
+    pub(super) geometry_tolerance: Option<f64>,
+    /// `updateEvery K` (mc_advanced): see `World::mc_every`.
+    pub(super) update_every: Option<u64>,
+}
+
+impl GranModel {
+    /// One model setting `key value` of a `pair_style gran` or `fix wall/gran` line; false if `key`
+    /// is not a model setting (the caller decides what else it may be).
+    pub(super) fn setting(&mut self, key: &str, v: Option<&str>) -> R<bool> {
+        match (key, v) {
+            ("mprTest", Some(x)) => self.mpr_test = x.parse()?,
+            ("geometryTolerance", Some(x)) => self.geometry_tolerance = Some(geometry_tolerance(x)?),
+            ("updateEvery", Some(x)) => self.update_every = Some(update_every(x)?),
+            ("pairRadii", Some("modified")) => self.stock_pair_radii = false,
+            ("pairRadii", Some("stock")) => self.stock_pair_radii = true,
+            ("pairRadii", Some(x)) => {
+                return Err(format!("pairRadii must be 'modified' or 'stock', got '{x}'"))
+            }
+            // LIGGGHTS' default for hertz; the core always applies tangential damping.
+            ("tangential_damping", Some("on")) => {}
+            _ => return Ok(false),
+        }
+        Ok(true)
+    }
+
+    /// The combination is one the engines run, and every setting belongs to the chosen model.
+    pub(super) fn check(&self) -> R<()> {
+        if !matches!(self.model.as_str(), "hertz" | "mc_advanced") {
+            return Err(unsupported(&format!("granular model '{}' (hertz or mc_advanced)", self.model)));
+        }
+        if !matches!(self.tangential.as_str(), "history" | "no_history") {
+            return Err(unsupported(&format!(
+                "tangential model '{}' (history or no_history)",
+                self.tangential
+            )));
+        }
+        if self.stock_pair_radii && self.model != "mc_advanced" {
+            return Err("pairRadii is a setting of model mc_advanced".into());
+        }
+        if self.geometry_tolerance.is_some() && self.model != "mc_advanced" {
+            return Err("geometryTolerance is a setting of model mc_advanced".into());
+        }
+        if self.update_every.is_some() && self.model != "mc_advanced" {
+            return Err("updateEvery is a setting of model mc_advanced".into());
+        }
+        if self.model == "mc_advanced" && self.surface_mc {
+            return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
+        }
+        Ok(())
+    }
+}
+
+/// `geometryTolerance` value: a finite number ≥ 0 (a fraction of the particle radius).
+pub(super) fn geometry_tolerance(x: &str) -> R<f64> {
+    match x.parse::<f64>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
+        _ => Err(format!(
+            "geometryTolerance must be a finite number >= 0 (a fraction of the particle radius), got '{x}'"
+        )),
+    }
+}
+
+/// Largest `updateEvery` (both engines; the plugin keeps it in an `int`).
+pub const MAX_UPDATE_EVERY: u64 = 1_000_000_000;
+
+/// `updateEvery` value: a whole number of steps from 1 to [`MAX_UPDATE_EVERY`].
+pub(super) fn update_every(x: &str) -> R<u64> {
+    match x.parse::<u64>() {
+        Ok(k) if (1..=MAX_UPDATE_EVERY).contains(&k) => Ok(k),
+        _ => Err(format!(
+            "updateEvery must be a whole number of steps from 1 to {MAX_UPDATE_EVERY}, got '{x}'"
+        )),
+    }
+}
+
+impl Deck {
+    pub(super) fn gran_model(a: &[&str], start: usize) -> R<(GranModel, usize)> {
+        let mut m = GranModel {
+            model: String::new(),
+            tangential: "history".into(),
+            surface_mc: false,
+            mpr_test: MprTest::Abs,
+            stock_pair_radii: false,
+            geometry_tolerance: None,
+            update_every: None,
+        };
+        let mut k = start;
+        while k < a.len() {
+            let v = a.get(k + 1).copied();
+            match (a[k], v) {
+                ("model", Some(x)) => m.model = x.into(),
+                ("tangential", Some(x)) => m.tangential = x.into(),
+                ("cohesion", Some("off")) | ("rolling_friction", Some("off")) => {}
+                ("surface", Some("default")) => m.surface_mc = false,
+                ("surface", Some("multicontact")) => m.surface_mc = true,
+                (key, v) => {
+                    if !m.setting(key, v)? {
+                        break;
+                    }
+                }
+            }
+            k += 2;
+        }
+        m.check()?;
+        Ok((m, k))
+    }
+
+    pub(super) fn pair_style(&mut self, a: &[&str]) -> R<()> {
+        if a.get(1) != Some(&"gran") {
+            return Err(unsupported(&format!("pair_style {}", a.get(1).unwrap_or(&""))));
+        }
+        let (m, k) = Self::gran_model(a, 2)?;
+        if k != a.len() {
+            return Err(unsupported(&format!("pair_style gran keyword {}", a[k])));
+        }
+        // The command-line options, when given, take precedence over the deck's settings; they
+        // approximate the multi-contact pass of mc_advanced and of nothing else.
+        let (cli_tol, cli_every) = (self.cli_geometry_tolerance, self.cli_mc_every);
+        if m.model != "mc_advanced" && (cli_tol > 0.0 || cli_every > 1) {
+            return Err(format!(
+                "--mc-geometry-tolerance and --mc-update-every apply to model mc_advanced only; this pair style is model {}",
+                m.model
+            ));
+        }
+        // A pair style defined again starts from the defaults, as in LIGGGHTS.
+        self.world.mc_geometry_tolerance =
+            if cli_tol > 0.0 { cli_tol } else { m.geometry_tolerance.unwrap_or(0.0) };
+        self.world.mc_every = if cli_every > 0 { cli_every } else { m.update_every.unwrap_or(1) };
+        self.pair = Some(m);
+        Ok(())
+    }
+
+    pub(super) fn prepare(&mut self) -> R<()> {
+        let pair = self.pair.clone().ok_or("run before pair_style gran")?;
+        let nt = self.ntypes;
+        if nt == 0 {
+            return Err("run before the box and atom types exist".into());
+        }
+        let per_type = |s: &Self, name: &str| -> R<Vec<f64>> {
+            let (style, v) =
+                s.props.get(name).ok_or_else(|| format!("fix property/global {name} is missing"))?;
+            if style != "peratomtype" {
+                return Err(format!("property {name} must be peratomtype"));
+            }
+            if v.len() != nt {
+                return Err(format!("property {name}: {} values for {nt} atom types", v.len()));
+            }
+            Ok(v.clone())
+        };
+        let per_pair = |s: &Self, name: &str| -> R<Vec<f64>> {
+            let (style, v) =
+                s.props.get(name).ok_or_else(|| format!("fix property/global {name} is missing"))?;
+            if style != "peratomtypepair" {
+                return Err(format!("property {name} must be peratomtypepair"));
+            }
+            if v.first().map(|n| *n as usize) != Some(nt) || v.len() != 1 + nt * nt {
+                return Err(format!("property {name}: expected {nt} followed by {} values", nt * nt));
+            }
+            Ok(v[1..].to_vec())
+        };
+        let e = per_type(self, "youngsModulus")?;
+        let nu = per_type(self, "poissonsRatio")?;
+        let rest = per_pair(self, "coefficientRestitution")?;
+        let fric = per_pair(self, "coefficientFriction")?;
+        let (closure, gammas, mprs): (Closure, Vec<f64>, Option<Vec<f64>>) = if pair.model == "mc_advanced" {
+            (
+                Closure::MultiContact,
+                per_type(self, "geometricPrefactor")?,
+                Some(per_type(self, "maxPenetrationRatio")?),
+            )
+        } else if pair.surface_mc {
+            let g = self.mc_gamma.ok_or("surface multicontact needs fix multicontact/halfspace")?;
+            (Closure::MultiContact, vec![g; nt], None)
+        } else {
+            if self.mc_gamma.is_some() {
+                return Err("fix multicontact/halfspace needs 'surface multicontact' in pair_style".into());
+            }
+            (Closure::Hertz, vec![0.0; nt], None)
+        };
+        let mut mats = Vec::with_capacity(nt);
+        for t in 0..nt {
+            let cap = mprs.as_ref().map(|m| (m[t], pair.mpr_test));
+            mats.push(
+                Material::new(e[t], nu[t], gammas[t], cap)
+                    .map_err(|e| format!("atom type {}: {e}", t + 1))?,
+            );
+        }
+        let tangential =
+            if pair.tangential == "no_history" { Tangential::NoHistory } else { Tangential::History };
+        self.world.set_materials(mats, &rest, &fric, tangential)?;
+        self.world.closure = Some(closure);
+        self.world.liggghts_radii = pair.surface_mc || pair.stock_pair_radii;
+        self.world.mc_range =
+            self.world.mc_range.max(if closure == Closure::MultiContact { 1.25 } else { 1.0 });
+        Ok(())
+    }
+}

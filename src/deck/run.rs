@@ -1,0 +1,190 @@
+//! `run N [upto]`: set-up, the step loop with its end-of-step outputs, and the closing summary.
+
+use super::*;
+
+impl Deck {
+    pub(super) fn end_of_step_outputs(&mut self, last: bool) -> R<Option<String>> {
+        let step = self.world.step;
+        self.sample_ave_times()?;
+        self.write_dumps()?;
+        let thermo_due = last || (self.thermo_every > 0 && step % self.thermo_every == 0);
+        if thermo_due {
+            return Ok(Some(self.thermo_line()?));
+        }
+        Ok(None)
+    }
+
+
+    pub(super) fn sample_ave_times(&mut self) -> R<()> {
+        let step = self.world.step;
+        for k in 0..self.aves.len() {
+            let Some(at) = self.aves[k].as_ref() else { continue };
+            if at.nvalid != step {
+                continue;
+            }
+            // Reused buffer: sampling happens every step in typical decks.
+            let mut vals = std::mem::take(&mut self.scratch);
+            vals.clear();
+            for v in &at.values {
+                vals.push(self.value_of(v, 0)?);
+            }
+            if let Some(at) = self.aves[k].as_mut() {
+                at.sample(step, &vals)?;
+            }
+            self.scratch = vals;
+        }
+        Ok(())
+    }
+
+    /// `boundary m`/`s`: widens the box on shrink-wrapped axes so that every particle, with its
+    /// radius and the neighbour skin as margin, stays inside. The engine checks for lost particles
+    /// at list rebuilds, which come before a particle moves a skin; so a box kept a skin beyond
+    /// every particle after each step never loses one. It only grows, so it never falls below the
+    /// created box (LIGGGHTS' `m` minimum).
+    fn shrink_wrap(&mut self) {
+        if !self.shrink.iter().any(|&s| s) {
+            return;
+        }
+        let skin = self.world.skin;
+        let p = &self.world.p;
+        let Some(d) = self.world.domain.as_mut() else { return };
+        for a in (0..3).filter(|&a| self.shrink[a]) {
+            for i in 0..p.len() {
+                let m = p.radius[i] + skin;
+                d.lo[a] = d.lo[a].min(p.x[i][a] - m);
+                d.hi[a] = d.hi[a].max(p.x[i][a] + m);
+            }
+        }
+    }
+
+    pub(super) fn run(&mut self, a: &[&str]) -> R<()> {
+        if a.len() < 2 {
+            return Err("run: missing N".into());
+        }
+        let n = int(a[1])?;
+        let upto = match a.get(2) {
+            None => false,
+            Some(&"upto") if a.len() == 3 => true,
+            Some(other) => return Err(unsupported(&format!("run keyword {other}"))),
+        };
+        if n < 0 {
+            return Err("run: N must be >= 0".into());
+        }
+        let nsteps = if upto {
+            (n as u64).checked_sub(self.world.step).ok_or("run upto: target step already passed")?
+        } else {
+            n as u64
+        };
+        self.insert_pending()?;
+        self.shrink_wrap();
+        self.prepare()?;
+        let warnings = self.world.setup()?;
+        for wmsg in warnings {
+            self.warn(&wmsg);
+        }
+        // As in LIGGGHTS, the setup of a run is an end of step for the averaging fixes.
+        self.sample_ave_times()?;
+        self.say("Setting up run ...");
+        let header = self.thermo_header();
+        self.say(&header);
+        for d in &self.local_dumps {
+            d.check(&self.pair_locals)?;
+        }
+        self.write_dumps()?;
+        let first = self.thermo_line()?;
+        self.say(&first);
+        let bar = if self.progress && !self.quiet && std::io::stdout().is_terminal() && nsteps >= 1000 {
+            let pb = indicatif::ProgressBar::new(nsteps);
+            pb.set_style(
+                indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps {per_sec} eta {eta}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            Some(pb)
+        } else {
+            None
+        };
+        let t0 = Instant::now();
+        let end = self.world.step + nsteps;
+        let builds0 = self.world.builds;
+        let updates0 = self.world.mc_influence_updates();
+        let passes0 = self.world.mc_updates;
+        let threaded0 = self.world.threaded_passes();
+        let kernel0 = (self.world.mc_kernel_contacts, self.world.mc_kernel_fallbacks);
+        while self.world.step < end {
+            self.world.step().map_err(|e| {
+                let m = e.to_string();
+                self.instability = Some(e);
+                m
+            })?;
+            self.shrink_wrap();
+            let last = self.world.step == end;
+            if let Some(line) = self.end_of_step_outputs(last)? {
+                match &bar {
+                    Some(pb) => pb.println(&line),
+                    None if self.quiet => {}
+                    None => println!("{line}"),
+                }
+                self.logln(&line);
+            }
+            if let Some(pb) = &bar {
+                if self.world.step % 100 == 0 {
+                    pb.set_position(nsteps - (end - self.world.step));
+                }
+            }
+        }
+        if let Some(pb) = bar {
+            pb.finish_and_clear();
+        }
+        let secs = t0.elapsed().as_secs_f64();
+        let np = self.world.p.len();
+        self.summary.steps += nsteps;
+        self.summary.particle_steps += (nsteps as f64) * np as f64;
+        self.summary.loop_seconds += secs;
+        self.summary.neighbor_builds += self.world.builds - builds0;
+        let rate = if secs > 0.0 { nsteps as f64 * np as f64 / secs } else { 0.0 };
+        // What the multi-contact approximations did: how often a particle's Eq. 2 geometry was
+        // recomputed, and in how many steps the full pass ran.
+        let mut approx = String::new();
+        if self.world.mc_geometry_tolerance > 0.0 {
+            let updates = self.world.mc_influence_updates() - updates0;
+            approx += &format!(
+                ", multi-contact geometry tolerance {:e}: recomputed in {:.2} % of particle-steps",
+                self.world.mc_geometry_tolerance,
+                100.0 * updates as f64 / (nsteps as f64 * np as f64).max(1.0)
+            );
+        }
+        if self.world.mc_every > 1 {
+            approx += &format!(
+                ", multi-contact update every {} steps: full pass in {} of {nsteps} steps",
+                self.world.mc_every,
+                self.world.mc_updates - passes0
+            );
+        }
+        // The engine times steps with and without its threads and keeps the faster (results
+        // are the same bits either way): say how often the threads were used.
+        let threads = rayon::current_num_threads();
+        let used = if threads > 1 {
+            let (a, b) = self.world.threaded_passes();
+            let passes = (a + b) - (threaded0.0 + threaded0.1);
+            // (The run's set-up pass counts too: at most 100 %.)
+            let pct = (100.0 * passes as f64 / (nsteps as f64).max(1.0)).min(100.0);
+            format!(" (threaded in {pct:.0} % of steps)")
+        } else {
+            String::new()
+        };
+        self.say(&format!(
+            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {threads} threads{used}, {} neighbour builds{approx})\n",
+            self.world.builds - builds0
+        ));
+        // Whether the Eq. 3 cap acted: contacts the multi-contact kernel evaluated, and how many of
+        // them it switched back to Hertz because a penetration ratio exceeded MPR.
+        let contacts = self.world.mc_kernel_contacts - kernel0.0;
+        if contacts > 0 {
+            let capped = self.world.mc_kernel_fallbacks - kernel0.1;
+            self.say(&format!(
+                "Multi-contact kernel: {contacts} contact evaluations, {capped} capped to Hertz by the maximum penetration ratio\n"
+            ));
+        }
+        Ok(())
+    }
+}

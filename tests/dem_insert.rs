@@ -1,0 +1,174 @@
+//! `fix particletemplate/sphere` + `fix particledistribution/discrete` + `fix insert/pack`:
+//! the inserted count and mass meet the target, no two particles overlap, every particle lies in
+//! the region, the same seed gives the same packing on one or two threads, and bad values stop
+//! with `ERROR: FILE:LINE` naming the command.
+
+use std::f64::consts::PI;
+use std::process::Command;
+
+/// Runs a deck in a fresh directory; returns success, stdout+stderr and the dump text (if any).
+fn run_deck(text: &str, extra: &[&str]) -> (bool, String, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("in.test");
+    std::fs::write(&deck, text).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+        .current_dir(dir.path())
+        .arg("run")
+        .arg(&deck)
+        .args(extra)
+        .args(["-log", "none"])
+        .output()
+        .unwrap();
+    let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let dump = std::fs::read_to_string(dir.path().join("out.dump")).unwrap_or_default();
+    (o.status.success(), all, dump)
+}
+
+/// Rows `x y z radius mass` of the last frame of a `dump custom … id x y z radius mass`.
+fn atoms(dump: &str) -> Vec<[f64; 5]> {
+    let last = dump.rfind("ITEM: ATOMS").expect("a dump frame");
+    dump[last..]
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().skip(1).map(|s| s.parse().unwrap()).collect();
+            [v[0], v[1], v[2], v[3], v[4]]
+        })
+        .collect()
+}
+
+const BASE: &str = "units si
+atom_style granular
+boundary f f f
+region box block -0.01 0.01 -0.01 0.01 -0.01 0.01 units box
+create_box 1 box
+neighbor 0.0002 bin
+fix m1 all property/global youngsModulus peratomtype 5e6
+fix m2 all property/global poissonsRatio peratomtype 0.3
+fix m3 all property/global coefficientRestitution peratomtypepair 1 0.8
+fix m4 all property/global coefficientFriction peratomtypepair 1 0.3
+pair_style gran model hertz tangential history
+pair_coeff * *
+timestep 1e-6
+";
+
+/// Two templates (constant 0.5 mm and gaussian 0.8 ± 0.05 mm radius, 1000 kg/m³), 30/70 by mass,
+/// packed into `region` with `target`; dumped at the start of a zero-step run.
+fn deck(region: &str, target: &str, seed: u64) -> String {
+    format!(
+        "{BASE}region ins {region} units box
+fix pts1 all particletemplate/sphere 15485863 atom_type 1 density constant 1000 radius constant 0.0005
+fix pts2 all particletemplate/sphere 15485867 atom_type 1 density constant 1000 radius gaussian 0.0008 0.00005
+fix pdd all particledistribution/discrete 32452843 2 pts1 0.3 pts2 0.7
+fix ins all insert/pack seed {seed} distributiontemplate pdd maxattempt 200 insert_every once overlapcheck yes all_in yes region ins {target}
+fix integr all nve/sphere
+dump d all custom 1 out.dump id x y z radius mass
+run 0
+"
+    )
+}
+
+const BLOCK: &str = "block -0.008 0.008 -0.008 0.008 -0.008 0.008";
+
+fn check_packing(p: &[[f64; 5]], inside: impl Fn(&[f64; 5]) -> bool) {
+    for (i, a) in p.iter().enumerate() {
+        assert!(inside(a), "particle {i} at {:?} not wholly inside the region", &a[..3]);
+        for b in &p[i + 1..] {
+            let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            // The dump prints 6 significant digits: allow that rounding (1e-5 relative).
+            assert!(d >= (a[3] + b[3]) * (1.0 - 1e-5), "overlap: distance {d:e} m < {:e} m", a[3] + b[3]);
+        }
+    }
+}
+
+#[test]
+fn count_target_is_met_without_overlap_inside_the_region() {
+    let (ok, out, dump) = run_deck(&deck(BLOCK, "particles_in_region 300", 32452867), &[]);
+    assert!(ok, "{out}");
+    assert!(out.contains("inserted 300 particles"), "{out}");
+    let p = atoms(&dump);
+    assert_eq!(p.len(), 300);
+    let h = 0.008;
+    check_packing(&p, |a| (0..3).all(|k| a[k].abs() + a[3] <= h * (1.0 + 1e-5)));
+    // Exact split by mass 30/70 through the templates' mean masses (constant: 0.5 mm; gaussian:
+    // ⟨r³⟩ = μ³ + 3μσ²): number fractions 0.3/m1 : 0.7/m2, largest remainder rounding.
+    let small = p.iter().filter(|a| (a[3] - 0.0005).abs() < 1e-9).count();
+    let (m1, m2) = (0.0005f64.powi(3), 0.0008f64.powi(3) + 3.0 * 0.0008 * 0.00005f64.powi(2));
+    let f1 = (0.3 / m1) / (0.3 / m1 + 0.7 / m2);
+    assert!((small as f64 - 300.0 * f1).abs() <= 1.0, "small particles {small}, expected {:.1}", 300.0 * f1);
+    // Mass column = ρ 4/3 π r³ for every particle (1e-5 relative: 6 printed digits).
+    for a in &p {
+        let m = 1000.0 * 4.0 / 3.0 * PI * a[3].powi(3);
+        assert!((a[4] - m).abs() <= 1e-5 * m, "mass {} vs {m}", a[4]);
+    }
+}
+
+#[test]
+fn volume_fraction_and_mass_targets_in_cylinder_and_sphere() {
+    // Volume fraction 0.2 of a cylinder r = 8 mm, 16 mm tall: the count is the target volume over
+    // the mean particle volume, so the inserted volume matches within the spread of the gaussian
+    // draws (σ/μ = 1/16 on r, so ≈ 3·6 % / √n on the volume: 5 % is ample for n ≈ 200).
+    let cyl = "cylinder z 0 0 0.008 -0.008 0.008";
+    let (ok, out, dump) = run_deck(&deck(cyl, "volumefraction_region 0.2", 7), &[]);
+    assert!(ok, "{out}");
+    let p = atoms(&dump);
+    let vol: f64 = p.iter().map(|a| 4.0 / 3.0 * PI * a[3].powi(3)).sum();
+    let target = 0.2 * PI * 0.008f64.powi(2) * 0.016;
+    assert!((vol / target - 1.0).abs() < 0.05, "inserted volume {vol:e} m³ vs target {target:e} m³");
+    check_packing(&p, |a| {
+        (a[0] * a[0] + a[1] * a[1]).sqrt() + a[3] <= 0.008 * (1.0 + 1e-5) && a[2].abs() + a[3] <= 0.008 * (1.0 + 1e-5)
+    });
+    // Mass 0.3 g (volume fraction 0.14) into a sphere of r = 8 mm: same reasoning, 5 %.
+    let (ok, out, dump) = run_deck(&deck("sphere 0 0 0 0.008", "mass_in_region 0.0003", 11), &[]);
+    assert!(ok, "{out}");
+    let p = atoms(&dump);
+    let mass: f64 = p.iter().map(|a| a[4]).sum();
+    assert!((mass / 0.0003 - 1.0).abs() < 0.05, "inserted mass {mass:e} kg vs 3e-4 kg");
+    check_packing(&p, |a| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() + a[3] <= 0.008 * (1.0 + 1e-5));
+}
+
+#[test]
+fn same_seed_same_packing_on_one_or_two_threads_and_another_seed_differs() {
+    let d = deck(BLOCK, "particles_in_region 200", 32452867);
+    let (ok1, o1, a) = run_deck(&d, &["--threads-mode", "serial"]);
+    let (ok2, o2, b) = run_deck(&d, &["--threads-mode", "parallel"]);
+    let (ok3, o3, c) = run_deck(&d, &[]);
+    assert!(ok1 && ok2 && ok3, "{o1}{o2}{o3}");
+    assert_eq!(a, b, "serial and parallel runs differ");
+    assert_eq!(a, c, "two runs with the same seed differ");
+    let (ok, o, e) = run_deck(&deck(BLOCK, "particles_in_region 200", 49979687), &[]);
+    assert!(ok, "{o}");
+    assert_ne!(a, e, "another seed gave the same packing: the seed is not used");
+}
+
+#[test]
+fn bad_values_name_the_command_and_line() {
+    // Fractions not summing to 1.
+    let bad = deck(BLOCK, "particles_in_region 10", 1).replace("pts1 0.3 pts2 0.7", "pts1 0.3 pts2 0.6");
+    let (ok, out, _) = run_deck(&bad, &[]);
+    assert!(!ok && out.contains("in.test:17: fix pdd particledistribution/discrete: the weights sum to 0.89"), "{out}");
+    // Radius ≤ 0.
+    let bad = deck(BLOCK, "particles_in_region 10", 1).replace("radius constant 0.0005", "radius constant 0");
+    let (ok, out, _) = run_deck(&bad, &[]);
+    assert!(!ok && out.contains("in.test:15: fix pts1 particletemplate/sphere: radius must be > 0"), "{out}");
+    // No room: 1000 particles of ~0.7 mm in a 4 mm cube cannot fit.
+    let (ok, out, _) = run_deck(&deck("block 0 0.004 0 0.004 0 0.004", "particles_in_region 1000", 1), &[]);
+    assert!(!ok && out.contains("fix ins insert/pack (line 18): the region has no room"), "{out}");
+    assert!(out.contains("in.test:21:"), "the run that inserts is named: {out}");
+}
+
+#[test]
+fn shrink_wrapped_box_follows_particles_that_a_fixed_box_loses() {
+    // Particles inserted moving down at 5 m/s travel 10 mm in 2000 steps of 1 µs: they leave the
+    // box (z ≥ −10 mm) from a region starting at z = −8 mm. `f` loses them; `m` grows the box.
+    let d = deck(BLOCK, "particles_in_region 50", 3)
+        .replace("all_in yes", "all_in yes vel constant 0 0 -5")
+        .replace("run 0", "run 2000");
+    let (ok, out, _) = run_deck(&d, &[]);
+    assert!(!ok && out.contains("lost particle"), "{out}");
+    let (ok, out, dump) = run_deck(&d.replace("boundary f f f", "boundary m m m"), &[]);
+    assert!(ok, "{out}");
+    let p = atoms(&dump);
+    assert_eq!(p.len(), 50);
+    assert!(p.iter().all(|a| a[2] < -0.01 + 0.008), "the particles moved 10 mm down");
+}
