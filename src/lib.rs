@@ -11,6 +11,7 @@ pub mod compare;
 pub mod contacts_cli;
 pub mod deck;
 pub mod engine;
+pub mod fem;
 pub mod harness;
 pub mod ffi;
 #[cfg(feature = "liggghts")]

@@ -132,6 +132,14 @@ enum Command {
         #[arg(long, default_value = "mpm_out")]
         out: PathBuf,
     },
+    /// Finite-element continuum reference: one sphere between rigid frictionless walls (JSON scene, see src/fem/scene.rs)
+    Continuum {
+        /// Scene file (JSON)
+        scene: PathBuf,
+        /// Output directory (continuum.csv, continuum.png)
+        #[arg(long, default_value = "continuum_out")]
+        out: PathBuf,
+    },
     /// Compare two LIGGGHTS-format outputs (dump custom, fix ave/time or fix print tables) column by column
     Compare(mcdem::compare::Args),
     /// Make a packing of the project's own: `hydrogel` is the 514-sphere packing of the uniaxial
@@ -537,6 +545,7 @@ fn main() -> ExitCode {
         }
         Command::Study { study: s } => study(s),
         Command::Mpm { scene, out } => mcdem::mpm::cli::run(&scene, &out),
+        Command::Continuum { scene, out } => mcdem::fem::scene::run(&scene, &out),
         // Its own exit statuses (0 agree, 1 differ, 2 unreadable input): see docs/compare.md.
         Command::Compare(args) => return mcdem::compare::cli(&args),
     };
