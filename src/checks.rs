@@ -32,7 +32,7 @@ pub fn rel(a: f64, b: f64, floor: f64) -> f64 {
     (a - b).abs() / b.abs().max(floor)
 }
 
-/// Eq. 2 evaluated from 3-D vectors on a sphere equals the closed form B(s) (SPEC §2).
+/// Eq. 2 evaluated from 3-D vectors on a sphere equals the closed form B(s) (docs/spec.md §2).
 fn sphere_bracket() -> Check {
     let r = 1e-3;
     let mut worst: f64 = 0.0;
@@ -194,7 +194,7 @@ fn newton_and_torque() -> Check {
 
 /// A sphere between two plates under lagged MC converges to the fixed point
 /// F = Hertz(R = r + Δ, δ0 + Δ), Δ = −γ(1+ν)F/(2πE·d)·(2ν−3) with the chord d = 2(r − δ0)
-/// between the two wall contact points (antipodal contacts, SPEC §2; R uses the modified radius).
+/// between the two wall contact points (antipodal contacts, docs/spec.md §2; R uses the modified radius).
 fn two_plate_fixed_point() -> Check {
     let (r, nu, gamma, e) = (1e-3, HYDROGEL_NU, 0.82, HYDROGEL_E);
     let sphere = Material::new(e, nu, gamma, None).unwrap();

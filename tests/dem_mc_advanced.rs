@@ -1,4 +1,4 @@
-//! `mc_advanced` limits through the whole engine (SPEC §3): MPR = 0 is Hertz bit for bit and a huge
+//! `mc_advanced` limits through the whole engine (docs/spec.md §3): MPR = 0 is Hertz bit for bit and a huge
 //! MPR is standard MC bit for bit, on the moving-plates deck.
 
 use std::path::{Path, PathBuf};

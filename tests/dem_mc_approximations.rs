@@ -139,7 +139,7 @@ fn a_negative_geometry_tolerance_is_a_clear_error() {
     assert!(err.contains("--mc-geometry-tolerance must be a finite number >= 0"), "{err}");
 }
 
-/// SPEC §6 hard case under the update interval: the dropped three-sphere column (impacts, the
+/// docs/spec.md §6 hard case under the update interval: the dropped three-sphere column (impacts, the
 /// contact network changing within a few steps) with `--mc-update-every 10` runs to the end with
 /// finite values. Its trajectory is not the exact one (docs/dem.md: the lag is not small under
 /// impacts, which is why the interval is off by default), but nothing runs away.

@@ -160,7 +160,7 @@ fn huge_mpr_is_stock_multicontact_same_gamma() {
     // next list build names some pairs the other way round, and stock then hands each partner the
     // other's radius for one step. That step is the whole difference (measured 1.6e-5 of the force
     // range; with atom sorting switched off in the deck, 5e-11), hence 1e-4 for bcc_box. With the
-    // default `pairRadii modified` (SPEC §2: both partners' modified radii, so a pair does not
+    // default `pairRadii modified` (docs/spec.md §2: both partners' modified radii, so a pair does not
     // depend on the neighbour-list order) pairs differ at second order; walls are unaffected.
     for (deck, tol_stock, tol) in [
         ("single_particle_plates.in", 1e-6, 1e-6),
@@ -249,7 +249,7 @@ fn engine_matches_plugin_step_by_step() {
     }
 }
 
-/// SPEC §6 hard case: a dropped three-sphere column. Stock `surface multicontact` aborts with
+/// docs/spec.md §6 hard case: a dropped three-sphere column. Stock `surface multicontact` aborts with
 /// "sidata.deltan < 0!" when a radius change leaves a touching pair with no effective overlap;
 /// `mc_advanced` treats that contact as open and runs to the end with finite values, the same
 /// trajectory in the plugin and in the engine.

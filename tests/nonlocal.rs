@@ -1,4 +1,4 @@
-//! End-to-end checks of the nonlocal reference solver (SPEC §4): Hertz limit, the single sphere in
+//! End-to-end checks of the nonlocal reference solver (docs/spec.md §4): Hertz limit, the single sphere in
 //! a rigid die (boussinesq), the 9-particle bcc cell symmetry, and the CLI.
 
 use mcdem::nonlocal::{Kernel, KernelKind, Nonlocal, Settings, Sphere, Wall};
@@ -70,7 +70,7 @@ fn kernel_none_is_hertz_for_a_sphere_between_plates() {
     }
 }
 
-/// Independent reduced solve of the die by symmetry (unknowns P_v, P_h), SPEC §4.
+/// Independent reduced solve of the die by symmetry (unknowns P_v, P_h), docs/spec.md §4.
 fn die_reduced(delta: f64, r: f64) -> (f64, f64) {
     let m = Material::hertz(E, NU).unwrap();
     let wm = Material::hertz(EW, NU).unwrap();
@@ -100,7 +100,7 @@ fn die_reduced(delta: f64, r: f64) -> (f64, f64) {
 
 #[test]
 fn die_table_boussinesq() {
-    // SPEC §4 table: Δ/r, P_v Hertz, P_v nonlocal, P_h nonlocal [N].
+    // docs/spec.md §4 table: Δ/r, P_v Hertz, P_v nonlocal, P_h nonlocal [N].
     let table = [
         (0.05, 1.637e-4, 1.827e-4, 2.08e-6),
         (0.10, 4.629e-4, 5.449e-4, 1.10e-5),
@@ -137,7 +137,7 @@ fn die_table_boussinesq() {
 
 #[test]
 fn bcc_cell_has_lattice_symmetry() {
-    // SPEC §5.1: d = 2 mm, cube of side d(1 + 2/√3); corner spheres touch three walls and the centre.
+    // docs/spec.md §5.1: d = 2 mm, cube of side d(1 + 2/√3); corner spheres touch three walls and the centre.
     let r = 1e-3;
     let a = 2.0 * r * (1.0 + 2.0 / 3.0_f64.sqrt());
     let m = Material::hertz(E, NU).unwrap();

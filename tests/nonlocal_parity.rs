@@ -1,7 +1,7 @@
-//! Parity of two independent codes (SPEC §4, consequence b): standard MC with prefactor γ, relaxed
+//! Parity of two independent codes (docs/spec.md §4, consequence b): standard MC with prefactor γ, relaxed
 //! to rest by the Rust DEM with strong damping and no friction, is a lagged fixed-point iteration
 //! of the nonlocal relation with kernel γ·G (boussinesq), so at rest the two must agree up to the
-//! second-order differences of SPEC §2 (MC evaluates R_eff with the modified radii and the
+//! second-order differences of docs/spec.md §2 (MC evaluates R_eff with the modified radii and the
 //! half-space term at the current contact points). Scene: the 9-particle bcc cell in the die of
 //! `liggghts_inputs/bcc_box.in`, top plate lowered by 0.3 r; and 50 polydisperse spheres compressed
 //! in a box past jamming, whose DEM rest state is handed to the nonlocal solver at the same wall

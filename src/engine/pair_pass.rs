@@ -61,7 +61,7 @@ impl World {
     }
 
     /// Whether the pair and wall passes evaluate in vectorised batches: they evaluate `tangential
-    /// history` with the radii of SPEC §2; the LIGGGHTS `surface multicontact` radii and
+    /// history` with the radii of docs/spec.md §2; the LIGGGHTS `surface multicontact` radii and
     /// `no_history` take the pair-by-pair path.
     pub(super) fn batched(&self) -> bool {
         !self.liggghts_radii

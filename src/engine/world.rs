@@ -67,7 +67,7 @@ pub struct World {
     /// LIGGGHTS 3.8 `surface multicontact` radius convention in pairs: the first particle of a
     /// pair keeps its original radius in R_eff and lever arm (only its overlap sees Δ). Set for
     /// decks that ask for LIGGGHTS' standard MC, so both engines give the same forces; the
-    /// `mc_advanced` model uses the modified radii of both particles (SPEC §2).
+    /// `mc_advanced` model uses the modified radii of both particles (docs/spec.md §2).
     pub liggghts_radii: bool,
     /// Multi-contact kernel counters since they were last zeroed (diagnostics): contacts the kernel
     /// saw (particles with two or more contacts, touching or within the MC range) and those the

@@ -1,4 +1,4 @@
-//! Compliance kernels G_i(c, k) of the nonlocal contact relation (SPEC §4, §4.1): the inward
+//! Compliance kernels G_i(c, k) of the nonlocal contact relation (docs/spec.md §4, §4.1): the inward
 //! displacement of particle i's surface at contact c per unit compressive force at its contact k.
 //!
 //! A kernel is a function of the angle between the two contact directions only (contacts sit on
@@ -7,7 +7,7 @@
 //! directions of particle–particle contacts move with the centres, and the Newton Jacobian is
 //! exact only with that derivative.
 //!
-//! # The `sphere` kernel (finite elastic sphere, SPEC §4.1)
+//! # The `sphere` kernel (finite elastic sphere, docs/spec.md §4.1)
 //!
 //! **Legendre series.** A normal surface traction σ_rr = −p_n P_n(cos θ), σ_rθ = 0 on a solid
 //! sphere of radius R (n ≠ 1) is carried by the two regular axisymmetric displacement families
@@ -24,7 +24,7 @@
 //! The n = 1 term carries the net force and has no solution on its own: the load is balanced by
 //! its own n = 1 component (the normal traction −3P cos θ/(4πR²)), which leaves the centre fixed
 //! and no n = 1 deformation; what remains free is a rigid translation along the load axis,
-//! u_r = d_1 cos θ, fixed below. A diametric pair of unit loads (the SPEC §4.1 verification case)
+//! u_r = d_1 cos θ, fixed below. A diametric pair of unit loads (the docs/spec.md §4.1 verification case)
 //! is exactly w(θ) = g(cos θ) + g(−cos θ): the odd terms, d_1 included, cancel and the even ones
 //! double.
 //!
@@ -50,14 +50,14 @@
 //! cancel, so the superposition Σ_k g(μ_ck) P_k is the exact displacement of the sphere, with the
 //! centre fixed (the d_1 translations cancel too). Charging every contact with its whole pair
 //! instead would count each load twice away from its antipode (a contact on the equator of a
-//! sphere pressed by two plates would see twice the plates' bulge). This is also how the Boussinesq kernel is used: SPEC §4.1
+//! sphere pressed by two plates would see twice the plates' bulge). This is also how the Boussinesq kernel is used: docs/spec.md §4.1
 //! compares its two-load sum with the sphere's pair values. Consequences:
 //! - θ → 0 (coincident contacts): g has the Boussinesq 1/chord singularity (a/(2s) is exactly
 //!   (1−ν²)P/(πEρ)) and, for ν < ½, a logarithmic one (−b ln s, from the tangential part of the
 //!   point-load field on a curved surface). As for the Boussinesq kernel, the load's own contact is
 //!   the local Hertz term: contacts closer than [`MIN_HALF_ANGLE_SINE`] contribute nothing.
 //! - The self term. The exact approach at c also contains the regular part of c's own field at
-//!   c, g_reg = lim_{s→0} [g − a/(2s) + b ln s] (times P_c), for which the SPEC relation has no
+//!   c, g_reg = lim_{s→0} [g − a/(2s) + b ln s] (times P_c), for which the relation of docs/spec.md §4 has no
 //!   term. The translation d_1 is chosen as −g_reg (d_1 = 0.3170 for ν = ½, 0.5034 for ν = 0.3),
 //!   i.e. g_reg = 0: for an equilibrated particle Σ_{k≠c} d_1 μ_ck P_k = −d_1 P_c, so the relation
 //!   without a self term then equals the exact superposition, self term included. (For ν = ½ this
@@ -69,7 +69,7 @@
 //!
 //! **Verification** (units P/(E R), diametric pair, accurate to < 1e−9): θ = 90°: −0.16168
 //! (ν = 0.3), −0.20721 (ν = 0.5); θ = 60° or 120°: −0.07919 (ν = 0.3), −0.12488 (ν = 0.5).
-//! SPEC §4.1 prints −0.158, −0.204, −0.084, −0.129: these are the same series (same d_n) summed
+//! docs/spec.md §4.1 prints −0.158, −0.204, −0.084, −0.129: these are the same series (same d_n) summed
 //! without acceleration and cut at n_max ≈ 3000–4000 with n_max ≡ 4 (mod 12), e.g. 3400, where
 //! the oscillating partial sums are still 3–5e−3 off the limit (both are tests below).
 
@@ -86,7 +86,7 @@ use crate::physics::brodu2015::{bracket_on_sphere, compliance_prefactor};
 /// Same role as [`crate::physics::brodu2015::MIN_CHORD`] for a unit sphere.
 pub const MIN_HALF_ANGLE_SINE: f64 = 1e-6;
 
-/// Which kernel G to use (SPEC §4.1 **[option `kernel`]**).
+/// Which kernel G to use (docs/spec.md §4.1 **[option `kernel`]**).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum KernelKind {
     /// Exact finite elastic sphere (Legendre series, see the module documentation).
@@ -127,7 +127,7 @@ impl FromStr for KernelKind {
 }
 
 /// A kernel ready for evaluation: the variant and a dimensionless prefactor `scale` (the γ of
-/// "kernel γ·G", SPEC §4 consequence (b); 1 for the reference solution).
+/// "kernel γ·G", docs/spec.md §4 consequence (b); 1 for the reference solution).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Kernel {
     kind: KernelKind,
@@ -159,13 +159,13 @@ impl Kernel {
     /// Compliance G(μ) [m/N] and dG/dμ of a sphere of Young's modulus `e`, Poisson ratio `nu` and
     /// radius `r`, for two contacts with direction cosine `mu`.
     ///
-    /// Boussinesq (SPEC §4): G = (1+ν) B(s) / (4π E r s), s = sin(α/2) = √((1−μ)/2), B the Eq. 2
+    /// Boussinesq (docs/spec.md §4): G = (1+ν) B(s) / (4π E r s), s = sin(α/2) = √((1−μ)/2), B the Eq. 2
     /// bracket on a sphere. It is written as −[`compliance_prefactor`](γ=1) · B(s) / d with the chord
     /// d = 2 r s, i.e. exactly minus the Eq. 2 displacement per unit force (Eq. 2 returns the radius
     /// growth; G is the inward displacement). dG/dμ = dG/ds · ds/dμ with ds/dμ = −1/(4s) and
-    /// dB/ds = 2(1−2ν) − 2(7−8ν)s (derivative of SPEC §2's B(s)).
+    /// dB/ds = 2(1−2ν) − 2(7−8ν)s (derivative of docs/spec.md §2's B(s)).
     ///
-    /// Sphere (SPEC §4.1): G = g(μ) / (E r), g the finite-sphere displacement of the module
+    /// Sphere (docs/spec.md §4.1): G = g(μ) / (E r), g the finite-sphere displacement of the module
     /// documentation ([`sphere_unit_displacement`]).
     #[inline]
     pub fn compliance(&self, mu: f64, e: f64, nu: f64, r: f64) -> (f64, f64) {
@@ -541,7 +541,7 @@ pub fn sphere_unit_displacement(mu: f64, nu: f64) -> (f64, f64) {
 }
 
 /// Inward surface displacement at polar angle `theta` (radians) of a sphere loaded by a diametric pair
-/// of unit compressive point forces at the poles, in units P/(E R) (the SPEC §4.1 orientation case):
+/// of unit compressive point forces at the poles, in units P/(E R) (the docs/spec.md §4.1 orientation case):
 /// g(cos θ) + g(−cos θ).
 pub fn sphere_pair_displacement(theta: f64, nu: f64) -> f64 {
     let mu = theta.cos();
@@ -582,7 +582,7 @@ mod tests {
 
     #[test]
     fn spec_orientation_values_of_boussinesq() {
-        // SPEC §4.1: a diametric pair of unit loads gives −0.098, −0.169 (θ = 90°, ν = 0.3, 0.5) and
+        // docs/spec.md §4.1: a diametric pair of unit loads gives −0.098, −0.169 (θ = 90°, ν = 0.3, 0.5) and
         // −0.028, −0.113 (θ = 60°) in units P/(E R) with the Boussinesq kernel.
         let k = Kernel::new(KernelKind::Boussinesq, 1.0).unwrap();
         let pair = |theta: f64, nu: f64| {
@@ -679,7 +679,7 @@ mod tests {
 
     #[test]
     fn sphere_orientation_values() {
-        // Converged diametric-pair values (units P/(E R)), measured with this kernel; the SPEC §4.1
+        // Converged diametric-pair values (units P/(E R)), measured with this kernel; the docs/spec.md §4.1
         // values −0.158, −0.204, −0.084, −0.129 are the raw series truncated (next test).
         for (theta, nu, want) in
             [(90.0, 0.3, -0.16168), (90.0, 0.5, -0.20721), (60.0, 0.3, -0.07919), (60.0, 0.5, -0.12488)]
@@ -707,7 +707,7 @@ mod tests {
 
     #[test]
     fn spec_orientation_values_are_the_truncated_raw_series() {
-        // The same coefficients summed without acceleration up to n = 3400 give the SPEC §4.1
+        // The same coefficients summed without acceleration up to n = 3400 give the docs/spec.md §4.1
         // digits; the partial sums still oscillate by ±4e−3 there (n^−½ decay).
         let raw = |theta: f64, nu: f64, n_max: usize| -> f64 {
             let mu = theta.to_radians().cos();
@@ -726,7 +726,7 @@ mod tests {
             [(90.0, 0.3, -0.158), (90.0, 0.5, -0.204), (60.0, 0.3, -0.084), (60.0, 0.5, -0.129)]
         {
             let truncated = raw(theta, nu, 3400);
-            assert!((truncated - spec).abs() < 1e-3, "theta {theta} nu {nu}: {truncated} vs SPEC {spec}");
+            assert!((truncated - spec).abs() < 1e-3, "theta {theta} nu {nu}: {truncated} vs docs/spec.md §4.1 {spec}");
             let converged = sphere_pair_displacement(f64::to_radians(theta), nu);
             assert!((converged - spec).abs() > 3e-3);
         }

@@ -1,5 +1,5 @@
 //! Nonlocal quasi-static reference (Gonzalez & Cuitiño, J. Mech. Phys. Solids 60 (2012) 333;
-//! SPEC §4): static equilibrium of elastic, frictionless spheres between rigid walls, where each
+//! docs/spec.md §4): static equilibrium of elastic, frictionless spheres between rigid walls, where each
 //! contact force deforms its particle at all the particle's other contacts.
 //!
 //! - [`kernel`]: the compliance G of one particle's surface at one contact to the load at another

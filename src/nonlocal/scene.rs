@@ -55,7 +55,7 @@ pub struct SceneSpec {
     pub spheres: Option<Vec<SphereSpec>>,
     pub particle_material: MaterialSpec,
     pub wall_material: MaterialSpec,
-    /// `boussinesq` (default), `sphere` (finite elastic sphere, SPEC §4.1) or `none` (pure Hertz).
+    /// `boussinesq` (default), `sphere` (finite elastic sphere, docs/spec.md §4.1) or `none` (pure Hertz).
     #[serde(default = "default_kernel")]
     pub kernel: String,
     /// Prefactor of the kernel (γ in "kernel γ·G"); 1 for the reference.

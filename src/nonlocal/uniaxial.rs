@@ -1,5 +1,5 @@
 //! Uniaxial (piston) compression of a packing in a rigid rectangular box by the nonlocal solver:
-//! the reference curve σ(φ) of the 514-particle hydrogel case (SPEC §5 item 2, docs/nonlocal.md
+//! the reference curve σ(φ) of the 514-particle hydrogel case (docs/spec.md §5.2, docs/nonlocal.md
 //! "514-particle compression").
 //!
 //! Walls: four frictionless side planes x = 0, L_x, y = 0, L_y, the bottom z = 0 and the piston plane
@@ -25,11 +25,11 @@ use crate::physics::Vec3;
 pub const HYDROGEL_LX: f64 = 0.165190844117647;
 /// Box side L_y [m].
 pub const HYDROGEL_LY: f64 = 0.165833589215686;
-/// Solid volume of the 514 spheres [m³] (SPEC §5 item 2).
+/// Solid volume of the 514 spheres [m³] (docs/spec.md §5.2).
 pub const HYDROGEL_SOLID_VOLUME: f64 = 2.695884e-3;
 /// Piston height at the start of every compression stroke of the example deck [m].
 pub const HYDROGEL_Z_START: f64 = 0.1676430125;
-/// Piston heights for φ = 0.66, 0.70, 0.75, 0.80, 0.85 (SPEC §5 item 2) [m].
+/// Piston heights for φ = 0.66, 0.70, 0.75, 0.80, 0.85 (docs/spec.md §5.2) [m].
 pub const HYDROGEL_Z_PHI: [(f64, f64); 5] =
     [(0.66, 0.14911), (0.70, 0.14059), (0.75, 0.13121), (0.80, 0.12301), (0.85, 0.11578)];
 

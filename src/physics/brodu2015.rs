@@ -1,7 +1,7 @@
 //! Standard multi-contact displacement: Brodu, Dijksman & Behringer, Phys. Rev. E 91, 032201
 //! (2015), as written in Ghods et al. (2022) Eq. 2.
 //!
-//! Sign convention (SPEC §2): `n_k`, `n_c` are the **inward** unit normals of the particle at the
+//! Sign convention (docs/spec.md §2): `n_k`, `n_c` are the **inward** unit normals of the particle at the
 //! contact points (from the contact point toward the centre). With inward normals Eq. 2 is
 //! Boussinesq's half-space point-load displacement projected on `n_c` (Johnson, Contact Mechanics,
 //! eq. 3.22), which is also what LIGGGHTS `fix multicontact/halfspace` implements.
@@ -72,7 +72,7 @@ pub fn bracket_pair_over_chord<L: Lane>(a_c: L, b_c: L, ab: L, d2: L, nu: f64) -
 }
 
 /// Eq. 2 bracket for two contacts on one sphere, as a function of s = sin(α/2) where α is the
-/// angle between the contacts: B(s) = 2(1−ν) + 2(1−2ν)s − (7−8ν)s² (SPEC §2).
+/// angle between the contacts: B(s) = 2(1−ν) + 2(1−2ν)s − (7−8ν)s² (docs/spec.md §2).
 /// B(0) = 2(1−ν) (Boussinesq), B(1) = 2ν − 3 (antipodal contacts: the radius grows).
 #[inline]
 pub fn bracket_on_sphere(s: f64, nu: f64) -> f64 {

@@ -1,6 +1,6 @@
 //! Per-particle contact-set kernel: applies Eq. 2 (standard MC) and optionally the Eq. 3 cap
 //! (advanced MC) to every contact of one particle, giving the radius change Δ_c the pair loop uses
-//! at contact c (r_i' = r_i + Δ_c, SPEC §2).
+//! at contact c (r_i' = r_i + Δ_c, docs/spec.md §2).
 //!
 //! The caller owns every buffer: no allocation per call. A particle with fewer than two loaded
 //! contacts has no neighbour terms and returns at once with all Δ = 0.

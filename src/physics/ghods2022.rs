@@ -8,7 +8,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-/// How a neighbour term is compared with δ_max (SPEC §3, a named option recorded in every output).
+/// How a neighbour term is compared with δ_max (docs/spec.md §3, a named option recorded in every output).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum MprTest {
     /// |δ_{k→c}| > δ_max trips the switch (default): MPR = 0 is exactly Hertz and MPR ≥ 1 is

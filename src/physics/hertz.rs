@@ -1,6 +1,6 @@
 //! Hertz normal force with viscous damping and the history tangential force with Coulomb
 //! truncation: Ghods et al. (2022) Eqs. 5–6 and App. C, identical to LIGGGHTS
-//! `pair_style gran model hertz tangential history` (SPEC §1).
+//! `pair_style gran model hertz tangential history` (docs/spec.md §1).
 //!
 //! Two sub-models in the LAMMPS GRANULAR manner: [`normal`] gives the normal force and the
 //! stiffness/damping coefficients that [`tangential_history`] then reads.

@@ -44,7 +44,7 @@ pub struct ContactForce {
     pub torque_j: Vec3,
     /// Unit normal from j (or the wall) to i.
     pub en: Vec3,
-    /// Effective overlap δ' = r_i' + r_j' − |x_i − x_j| [m] (SPEC §2).
+    /// Effective overlap δ' = r_i' + r_j' − |x_i − x_j| [m] (docs/spec.md §2).
     pub overlap: f64,
     /// Contact point [m]: midpoint of the overlap of the modified spheres (LIGGGHTS convention);
     /// for a wall, the point on the wall.
@@ -109,7 +109,7 @@ fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3) -> ContactFor
     let mut force_i = g.en * normal.force;
     let (mut torque_i, mut torque_j) = (Vec3::zeros(), Vec3::zeros());
     if c.friction > 0.0 {
-        // Relative tangential velocity at the contact point, rotation included (SPEC §1).
+        // Relative tangential velocity at the contact point, rotation included (docs/spec.md §1).
         let vtr = g.vr - g.en * vn + g.en.cross(&g.w);
         let ft = match c.tangential {
             Tangential::History => hertz::tangential_history(shear, &vtr, &g.en, dt, &normal, c.friction),

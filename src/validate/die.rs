@@ -1,4 +1,4 @@
-//! Cases `single_particle` and `bcc` (paper App. B, Fig. B.2; SPEC §5 item 1): hydrogel spheres
+//! Cases `single_particle` and `bcc` (paper App. B, Fig. B.2; docs/spec.md §5.1): hydrogel spheres
 //! (d = 2 mm) in a rigid cubic die, top plate pushed down at 0.01 m/s, gravity off. Plate stress and
 //! side-wall stress against plate displacement / r for Hertz, standard MC (γ = 0.82) and advanced
 //! MC (γ = 0.81, MPR = 0.11), run by the Rust DEM (and by the LIGGGHTS plugin when it is built),
@@ -23,7 +23,7 @@ const D: f64 = 0.002;
 const R: f64 = D / 2.0;
 const V_PLATE: f64 = 0.01;
 const DT: f64 = 1e-5;
-/// Plate travel of the comparison, in radii (the SPEC §4 die table goes to 0.3).
+/// Plate travel of the comparison, in radii (the docs/spec.md §4 die table goes to 0.3).
 const TRAVEL: f64 = 0.3;
 /// Nonlocal load steps over the travel (one per 0.01 r, the DEM output interval).
 const NONLOCAL_STEPS: usize = 30;
@@ -219,7 +219,7 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     let mut notes = Vec::new();
     let mut targets = Vec::new();
 
-    // References: both kernels, `sphere` first (SPEC §4.1 default, the primary reference).
+    // References: both kernels, `sphere` first (docs/spec.md §4.1 default, the primary reference).
     let mut refs = Vec::new();
     for kind in [KernelKind::Sphere, KernelKind::Boussinesq] {
         let (c, secs) = nonlocal(&die, kind, 1.0)?;
@@ -236,7 +236,7 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     }
     let primary = &refs[0];
     // Consistency partners: kernel `none` is quasi-static Hertz; boussinesq × 0.82 is the fixed
-    // point standard MC (γ = 0.82) iterates towards (SPEC §4 consequence (b)).
+    // point standard MC (γ = 0.82) iterates towards (docs/spec.md §4 consequence (b)).
     let (hertz_qs, _) = nonlocal(&die, KernelKind::None, 1.0)?;
     let (mc_qs, _) = nonlocal(&die, KernelKind::Boussinesq, GAMMA_STANDARD)?;
     push_curve(&mut rows, die.case, "nonlocal_none", "kernel_scale=1", &hertz_qs);
@@ -398,7 +398,7 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     }
     let (best, scan_png) = gamma_scan(&die, &refs, &mut rows, &mut md, &opts.out)?;
     if die.case == "bcc" {
-        // SPEC §4 consequence (b): standard MC relaxed by the DEM is a lagged iteration of the
+        // docs/spec.md §4 consequence (b): standard MC relaxed by the DEM is a lagged iteration of the
         // nonlocal relation with kernel γG, so against the γ = 1 kernel (`boussinesq`) the scan must
         // find its best at γ = 1 (one scan step either side). The bcc contacts stay small enough
         // for the second-order geometric terms not to move it; the single particle's do (report).
@@ -605,7 +605,7 @@ pub fn run_bcc(opts: &Options) -> Result<CaseResult, String> {
     run_die(bcc(), opts)
 }
 
-/// The SPEC §4 die table (validation/reference/die_single_boussinesq.csv), computed by an
+/// The docs/spec.md §4 die table (validation/reference/die_single_boussinesq.csv), computed by an
 /// independent script: the solver's boussinesq and `none` curves must reproduce it, P_v to 1e-3
 /// relative and P_h to its three printed digits (5e-3).
 const DIE_TABLE: &str = include_str!("../../validation/reference/die_single_boussinesq.csv");

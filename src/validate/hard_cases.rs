@@ -1,4 +1,4 @@
-//! Case `hard_cases` (SPEC §6): each numerically hard situation is run and its outcome reported —
+//! Case `hard_cases` (docs/spec.md §6): each numerically hard situation is run and its outcome reported —
 //! a finite result, or a clear stop that names the cause. Nothing here may produce NaN or abort.
 
 use std::fmt::Write as _;
@@ -411,7 +411,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
     md.push_str(&gamma_sweep_plot(opts, &mut rows)?);
     Ok(CaseResult {
         name: "hard_cases",
-        title: "numerical stability on hard cases (SPEC §6)".into(),
+        title: "numerical stability on hard cases (docs/spec.md §6)".into(),
         passed: outcomes.iter().all(|o| o.ok),
         targets: Vec::new(),
         rows,

@@ -1,4 +1,4 @@
-//! Case `uniaxial` (paper Figs. 1–4; SPEC §5 item 2): the 514-particle hydrogel packing of the
+//! Case `uniaxial` (paper Figs. 1–4; docs/spec.md §5.2): the 514-particle hydrogel packing of the
 //! Debian example compressed by the piston to φ = 0.85 and back, twice; the second compression is
 //! evaluated. Per Poisson ratio ν: σ–φ curves of Hertz, standard MC (at the highest γ of a probe
 //! ladder that stays stable) and advanced MC, each against the nonlocal reference started from the
@@ -25,7 +25,7 @@ const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_publi
 /// case use the project's own packing even where liggghts-doc is installed).
 pub const EXAMPLE_ENV: &str = "MCDEM_HYDROGEL_EXAMPLE";
 
-/// Box, solid volume and piston start of the example (SPEC §5 item 2), shared with the solver.
+/// Box, solid volume and piston start of the example (docs/spec.md §5.2), shared with the solver.
 use crate::nonlocal::uniaxial::{
     HYDROGEL_LX as LX, HYDROGEL_LY as LY, HYDROGEL_SOLID_VOLUME as SOLID_VOLUME, HYDROGEL_Z_PHI,
     HYDROGEL_Z_START as Z0,
@@ -54,7 +54,7 @@ pub struct Setup {
     pub stroke: u64,
     pub every: u64,
     pub nonlocal_steps: usize,
-    /// Kernel of the reference: `sphere` (SPEC §4.1 default); the quick mode uses `boussinesq`,
+    /// Kernel of the reference: `sphere` (docs/spec.md §4.1 default); the quick mode uses `boussinesq`,
     /// several times cheaper on this packing.
     pub kernel: KernelKind,
 }

@@ -278,7 +278,7 @@ impl Nonlocal {
     /// walls and body forces. Newton cannot do this job: far from equilibrium the packing has to
     /// rearrange, which is a minimisation, not a root-finding problem. With `nonlocal` the contact
     /// law is the nonlocal relation with the approach lagged by one FIRE step (the fixed-point
-    /// iteration that standard multi-contact performs in the DEM, SPEC §4 (b)); without it, plain
+    /// iteration that standard multi-contact performs in the DEM, docs/spec.md §4 (b)); without it, plain
     /// Hertz. Stops when max |net force| ≤ `ftol` × mean contact force, after `max_steps`, or on a
     /// stall (dt below [`FIRE_STALL_DT`] × the initial dt and no new low of the residual for
     /// [`FIRE_STALL_STEPS`] steps: the lagged iteration oscillates; recorded for the caller).

@@ -1,5 +1,5 @@
 //! Static equilibrium of elastic, frictionless spheres between rigid plane walls with the nonlocal
-//! contact relation of Gonzalez & Cuitiño (2012) (SPEC §4):
+//! contact relation of Gonzalez & Cuitiño (2012) (docs/spec.md §4):
 //!
 //! ```text
 //! force balance, particle i:   Σ_{c ∈ C_i} −P_c e_ic = 0

@@ -87,7 +87,7 @@ fn jacobian_check(kind: KernelKind) {
     }
 }
 
-/// Single hydrogel sphere (SPEC §4 die: E = 23.3 kPa, ν = 0.5, r = 1 mm, walls 50 MPa) in a
+/// Single hydrogel sphere (docs/spec.md §4 die: E = 23.3 kPa, ν = 0.5, r = 1 mm, walls 50 MPa) in a
 /// rigid cubic die of side 2r, top plate pushed down by Δ in steps of 0.05 r. Returns, per step,
 /// (Δ/r, P_v, P_h, P_v Hertz) and checks convergence and the die's symmetry.
 fn die(kind: KernelKind) -> Vec<(f64, f64, f64, f64)> {
