@@ -12,8 +12,8 @@ pub mod contacts_cli;
 pub mod deck;
 pub mod engine;
 pub mod fem;
-pub mod harness;
 pub mod ffi;
+pub mod harness;
 #[cfg(feature = "liggghts")]
 pub mod liggghts;
 pub mod mpm;

@@ -116,7 +116,8 @@ fn volume_fraction_and_mass_targets_in_cylinder_and_sphere() {
     let target = 0.2 * PI * 0.008f64.powi(2) * 0.016;
     assert!((vol / target - 1.0).abs() < 0.05, "inserted volume {vol:e} m³ vs target {target:e} m³");
     check_packing(&p, |a| {
-        (a[0] * a[0] + a[1] * a[1]).sqrt() + a[3] <= 0.008 * (1.0 + 1e-5) && a[2].abs() + a[3] <= 0.008 * (1.0 + 1e-5)
+        (a[0] * a[0] + a[1] * a[1]).sqrt() + a[3] <= 0.008 * (1.0 + 1e-5)
+            && a[2].abs() + a[3] <= 0.008 * (1.0 + 1e-5)
     });
     // Mass 0.3 g (volume fraction 0.14) into a sphere of r = 8 mm: same reasoning, 5 %.
     let (ok, out, dump) = run_deck(&deck("sphere 0 0 0 0.008", "mass_in_region 0.0003", 11), &[]);
@@ -146,7 +147,10 @@ fn bad_values_name_the_command_and_line() {
     // Fractions not summing to 1.
     let bad = deck(BLOCK, "particles_in_region 10", 1).replace("pts1 0.3 pts2 0.7", "pts1 0.3 pts2 0.6");
     let (ok, out, _) = run_deck(&bad, &[]);
-    assert!(!ok && out.contains("in.test:17: fix pdd particledistribution/discrete: the weights sum to 0.89"), "{out}");
+    assert!(
+        !ok && out.contains("in.test:17: fix pdd particledistribution/discrete: the weights sum to 0.89"),
+        "{out}"
+    );
     // Radius ≤ 0.
     let bad = deck(BLOCK, "particles_in_region 10", 1).replace("radius constant 0.0005", "radius constant 0");
     let (ok, out, _) = run_deck(&bad, &[]);

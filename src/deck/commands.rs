@@ -133,7 +133,9 @@ fn boundary(d: &mut Deck, a: &[&str]) -> R<()> {
                 d.shrink[k] = true;
                 false
             }
-            other => return Err(unsupported(&format!("boundary style {other} (f, p, m or s, one per axis)"))),
+            other => {
+                return Err(unsupported(&format!("boundary style {other} (f, p, m or s, one per axis)")))
+            }
         };
     }
     Ok(())
@@ -264,7 +266,9 @@ fn thermo_modify(d: &mut Deck, a: &[&str]) -> R<()> {
                 let f = a.get(k + 2).ok_or("thermo_modify format float: missing format")?;
                 match format::parse(f)?.as_slice() {
                     [format::Piece::Conv(s)] => d.thermo_float = Some(s.clone()),
-                    _ => return Err(format!("thermo_modify format float: one conversion expected in \"{f}\"")),
+                    _ => {
+                        return Err(format!("thermo_modify format float: one conversion expected in \"{f}\""))
+                    }
                 }
                 k += 3;
             }

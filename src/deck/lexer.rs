@@ -110,7 +110,6 @@ impl Deck {
         }
         Ok(())
     }
-
 }
 
 #[cfg(test)]

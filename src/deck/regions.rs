@@ -10,8 +10,17 @@ pub(super) enum Region {
     Block([f64; 6]),
     /// A circular cylinder along axis `axis` (0 x, 1 y, 2 z): centre (c1, c2) in the other two
     /// coordinates in order, radius r, from lo to hi along the axis.
-    Cylinder { axis: usize, c: [f64; 2], r: f64, lo: f64, hi: f64 },
-    Sphere { c: Vec3, r: f64 },
+    Cylinder {
+        axis: usize,
+        c: [f64; 2],
+        r: f64,
+        lo: f64,
+        hi: f64,
+    },
+    Sphere {
+        c: Vec3,
+        r: f64,
+    },
 }
 
 impl Region {
@@ -111,7 +120,11 @@ impl Deck {
             }
             "sphere" => {
                 commands::need(a, 7)?;
-                let c = Vec3::new(finite(a[3], "the centre")?, finite(a[4], "the centre")?, finite(a[5], "the centre")?);
+                let c = Vec3::new(
+                    finite(a[3], "the centre")?,
+                    finite(a[4], "the centre")?,
+                    finite(a[5], "the centre")?,
+                );
                 let r = finite(a[6], "the radius")?;
                 if r <= 0.0 {
                     return Err(format!("region sphere: radius must be > 0, got {}", a[6]));

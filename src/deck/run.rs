@@ -14,7 +14,6 @@ impl Deck {
         Ok(None)
     }
 
-
     pub(super) fn sample_ave_times(&mut self) -> R<()> {
         let step = self.world.step;
         for k in 0..self.aves.len() {

@@ -259,7 +259,6 @@ impl Deck {
         Ok(())
     }
 
-
     /// `next V…`: each variable moves to its next value; one exhausted is deleted and the `jump`
     /// that closes its loop is skipped (LAMMPS).
     pub(super) fn next(&mut self, a: &[&str]) -> R<()> {

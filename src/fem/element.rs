@@ -11,7 +11,9 @@
 //! linear law the trace of the strain is replaced by its element mean (B-bar).
 //! Without the remedy each Gauss point is its own "element mean", which gives the plain energy.
 
-use super::material::{det_derivs, iso_i1_derivs, linear_deviatoric, linear_deviatoric_hessian, nh_volumetric, Lame, H9, M3};
+use super::material::{
+    det_derivs, iso_i1_derivs, linear_deviatoric, linear_deviatoric_hessian, nh_volumetric, Lame, H9, M3,
+};
 
 /// Constitutive law of the body.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,8 +34,16 @@ pub enum Volumetric {
 }
 
 /// Natural coordinates of the nodes: bottom face counter-clockwise, then the top face.
-pub const CORNERS: [[f64; 3]; 8] =
-    [[-1., -1., -1.], [1., -1., -1.], [1., 1., -1.], [-1., 1., -1.], [-1., -1., 1.], [1., -1., 1.], [1., 1., 1.], [-1., 1., 1.]];
+pub const CORNERS: [[f64; 3]; 8] = [
+    [-1., -1., -1.],
+    [1., -1., -1.],
+    [1., 1., -1.],
+    [-1., 1., -1.],
+    [-1., -1., 1.],
+    [1., -1., 1.],
+    [1., 1., 1.],
+    [-1., 1., 1.],
+];
 
 /// Reference-configuration data of one element: shape-function gradients ∂N_a/∂X at the 8 Gauss
 /// points and the quadrature weights (det of the reference Jacobian; the Gauss weights are 1).
@@ -122,7 +132,8 @@ fn push_hess(h: &H9, dn: &[[f64; 3]; 8], out: &mut [[f64; 24]; 24]) {
     for p in 0..9 {
         for b in 0..8 {
             for k in 0..3 {
-                t[p][3 * b + k] = h[p][3 * k] * dn[b][0] + h[p][3 * k + 1] * dn[b][1] + h[p][3 * k + 2] * dn[b][2];
+                t[p][3 * b + k] =
+                    h[p][3 * k] * dn[b][0] + h[p][3 * k + 1] * dn[b][1] + h[p][3 * k + 2] * dn[b][2];
             }
         }
     }
@@ -146,7 +157,15 @@ fn add_outer(out: &mut [[f64; 24]; 24], s: f64, a: &[f64; 24], b: &[f64; 24]) {
 
 /// The element's energy Π_e, gradient ∂Π_e/∂u and (if `hessian`) ∂²Π_e/∂u². `Err` if a Gauss point
 /// is inverted (J ≤ 0), which the Newton line search treats as a step too long.
-pub fn evaluate(law: Law, lame: &Lame, vol: Volumetric, geo: &Geometry, u: &[[f64; 3]; 8], hessian: bool, out: &mut Output) -> Result<(), ()> {
+pub fn evaluate(
+    law: Law,
+    lame: &Lame,
+    vol: Volumetric,
+    geo: &Geometry,
+    u: &[[f64; 3]; 8],
+    hessian: bool,
+    out: &mut Output,
+) -> Result<(), ()> {
     out.energy = 0.0;
     out.grad = [0.0; 24];
     if hessian {

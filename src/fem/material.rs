@@ -101,7 +101,8 @@ pub fn iso_i1_derivs(f: &M3, j: f64, dj: &M3, d2j: &H9) -> (f64, M3, H9) {
             let (k, l) = (q / 3, q % 3);
             let daq = a1 * dj[k][l];
             let d2a = a2 * dj[i][jj] * dj[k][l] + a1 * d2j[p][q];
-            h[p][q] = d2a * i1 + dap * 2.0 * f[k][l] + daq * 2.0 * f[i][jj] + if p == q { 2.0 * a } else { 0.0 };
+            h[p][q] =
+                d2a * i1 + dap * 2.0 * f[k][l] + daq * 2.0 * f[i][jj] + if p == q { 2.0 * a } else { 0.0 };
         }
     }
     (a * i1, g, h)
@@ -110,7 +111,11 @@ pub fn iso_i1_derivs(f: &M3, j: f64, dj: &M3, d2j: &H9) -> (f64, M3, H9) {
 /// Neo-Hookean volumetric energy U(J) = −μ ln J + λ/2 (ln J)² and U′, U″ (Bonet & Wood Eq. 6.27).
 pub fn nh_volumetric(l: &Lame, j: f64) -> (f64, f64, f64) {
     let lj = j.ln();
-    (-l.mu * lj + 0.5 * l.lambda * lj * lj, (-l.mu + l.lambda * lj) / j, (l.mu + l.lambda - l.lambda * lj) / (j * j))
+    (
+        -l.mu * lj + 0.5 * l.lambda * lj * lj,
+        (-l.mu + l.lambda * lj) / j,
+        (l.mu + l.lambda - l.lambda * lj) / (j * j),
+    )
 }
 
 /// Small-strain deviatoric energy density μ ε_dev:ε_dev, its gradient 2μ ε_dev and its (constant)

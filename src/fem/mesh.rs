@@ -97,12 +97,22 @@ pub fn sphere_octant(r: f64, n: usize) -> Mesh {
             }
         }
     }
-    let lattice = |ids: [[usize; 3]; 8], f: &dyn Fn(usize, usize, usize) -> usize| ids.map(|[a, b, d]| f(a, b, d));
+    let lattice =
+        |ids: [[usize; 3]; 8], f: &dyn Fn(usize, usize, usize) -> usize| ids.map(|[a, b, d]| f(a, b, d));
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
                 hex.push(lattice(
-                    [[i, j, k], [i + 1, j, k], [i + 1, j + 1, k], [i, j + 1, k], [i, j, k + 1], [i + 1, j, k + 1], [i + 1, j + 1, k + 1], [i, j + 1, k + 1]],
+                    [
+                        [i, j, k],
+                        [i + 1, j, k],
+                        [i + 1, j + 1, k],
+                        [i, j + 1, k],
+                        [i, j, k + 1],
+                        [i + 1, j, k + 1],
+                        [i + 1, j + 1, k + 1],
+                        [i, j + 1, k + 1],
+                    ],
                     &|a, b, d| cube[cid(a, b, d)],
                 ));
             }
@@ -133,7 +143,8 @@ pub fn sphere_octant(r: f64, n: usize) -> Mesh {
                         pt = [0.0; 3];
                         pt[a] = r;
                     }
-                    blk[bid(l, p, q)] = if l == 0 { cube[cid(key[0], key[1], key[2])] } else { node((key, l), pt, &mut x) };
+                    blk[bid(l, p, q)] =
+                        if l == 0 { cube[cid(key[0], key[1], key[2])] } else { node((key, l), pt, &mut x) };
                 }
             }
         }
@@ -141,7 +152,16 @@ pub fn sphere_octant(r: f64, n: usize) -> Mesh {
             for p in 0..n {
                 for l in 0..m {
                     let mut h = lattice(
-                        [[l, p, q], [l + 1, p, q], [l + 1, p + 1, q], [l, p + 1, q], [l, p, q + 1], [l + 1, p, q + 1], [l + 1, p + 1, q + 1], [l, p + 1, q + 1]],
+                        [
+                            [l, p, q],
+                            [l + 1, p, q],
+                            [l + 1, p + 1, q],
+                            [l, p + 1, q],
+                            [l, p, q + 1],
+                            [l + 1, p, q + 1],
+                            [l + 1, p + 1, q + 1],
+                            [l, p + 1, q + 1],
+                        ],
                         &|u, v, w| blk[bid(u, v, w)],
                     );
                     // (l, p, q) maps to axes (a, a+1, a+2): a cyclic permutation, so right-handed;

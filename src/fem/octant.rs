@@ -90,7 +90,9 @@ impl SphereRun {
                 return Err(format!("delta_over_r must be positive and increasing, got {d} after {prev}"));
             }
             if d > MAX_DELTA_OVER_R {
-                return Err(format!("delta_over_r = {d} is beyond what the octant mesh is built for ({MAX_DELTA_OVER_R})"));
+                return Err(format!(
+                    "delta_over_r = {d} is beyond what the octant mesh is built for ({MAX_DELTA_OVER_R})"
+                ));
             }
             prev = d;
         }
@@ -114,7 +116,14 @@ impl SphereRun {
             planes.push(Plane { axis: 0, pos: self.radius, upper: true });
             planes.push(Plane { axis: 1, pos: self.radius, upper: true });
         }
-        Problem { mesh, law: self.law, lame: Lame::from_e_nu(self.youngs_modulus, self.poisson_ratio), vol: self.vol, fixed, planes }
+        Problem {
+            mesh,
+            law: self.law,
+            lame: Lame::from_e_nu(self.youngs_modulus, self.poisson_ratio),
+            vol: self.vol,
+            fixed,
+            planes,
+        }
     }
 
     /// Runs the load path. Each interval between reported points is one load step, halved on
@@ -140,7 +149,8 @@ impl SphereRun {
                 // dropped if it would invert an element.
                 if let Some((u_prev, d_prev)) = &last {
                     let ratio = (next - at) / d_prev;
-                    let trial: Vec<f64> = state.u.iter().zip(u_prev).map(|(u, v)| u + ratio * (u - v)).collect();
+                    let trial: Vec<f64> =
+                        state.u.iter().zip(u_prev).map(|(u, v)| u + ratio * (u - v)).collect();
                     if solver.energy(&p, &trial).is_some() {
                         state.u = trial;
                     }

@@ -77,14 +77,20 @@ impl Scene {
             Levels::One(l) => vec![l],
             Levels::Many(v) => v,
         };
-        if !(levels.len() == 1 || (levels.len() == 3 && levels[1] == levels[0] + 1 && levels[2] == levels[1] + 1)) {
-            return Err(format!("{name}: mesh_level must be one level or three consecutive levels, got {levels:?}"));
+        if !(levels.len() == 1
+            || (levels.len() == 3 && levels[1] == levels[0] + 1 && levels[2] == levels[1] + 1))
+        {
+            return Err(format!(
+                "{name}: mesh_level must be one level or three consecutive levels, got {levels:?}"
+            ));
         }
         let delta_over_r = match f.delta_over_r {
             Steps::List(v) => v,
             Steps::Range { to, step } => {
                 if !(step > 0.0 && to >= step) {
-                    return Err(format!("{name}: delta_over_r needs 0 < step <= to, got step {step}, to {to}"));
+                    return Err(format!(
+                        "{name}: delta_over_r needs 0 < step <= to, got step {step}, to {to}"
+                    ));
                 }
                 let n = (to / step - 1e-9).ceil() as usize;
                 (1..=n).map(|i| (i as f64 * step).min(to)).collect()
@@ -163,12 +169,19 @@ fn table(scene: &Scene, curves: &[Vec<Point>]) -> String {
     for (i, p) in curves[0].iter().enumerate() {
         let v: Vec<&Point> = curves.iter().map(|c| &c[i]).collect();
         let (pl, sd) = if v.len() == 3 {
-            (richardson(v[0].plate_stress, v[1].plate_stress, v[2].plate_stress), richardson(v[0].side_stress, v[1].side_stress, v[2].side_stress))
+            (
+                richardson(v[0].plate_stress, v[1].plate_stress, v[2].plate_stress),
+                richardson(v[0].side_stress, v[1].side_stress, v[2].side_stress),
+            )
         } else {
             let one = |x: f64| super::Richardson { value: x, error: f64::NAN, order: f64::NAN };
             (one(v[0].plate_stress), one(v[0].side_stress))
         };
-        let _ = write!(s, "{},{:.6e},{:.3e},{:.6e},{:.3e},{:.2},{:.2}", p.delta_over_r, pl.value, pl.error, sd.value, sd.error, pl.order, sd.order);
+        let _ = write!(
+            s,
+            "{},{:.6e},{:.3e},{:.6e},{:.3e},{:.2},{:.2}",
+            p.delta_over_r, pl.value, pl.error, sd.value, sd.error, pl.order, sd.order
+        );
         for q in &v {
             let _ = write!(s, ",{:.6e},{:.6e}", q.plate_stress, q.side_stress);
         }
@@ -180,11 +193,31 @@ fn table(scene: &Scene, curves: &[Vec<Point>]) -> String {
 fn plot(scene: &Scene, curves: &[Vec<Point>], path: &Path) -> Result<(), String> {
     let mut series = Vec::new();
     for (r, c) in scene.runs.iter().zip(curves) {
-        series.push(Series { label: format!("plate, level {}", r.level), points: c.iter().map(|p| (p.delta_over_r, p.plate_stress)).collect(), markers: false, thin: false });
+        series.push(Series {
+            label: format!("plate, level {}", r.level),
+            points: c.iter().map(|p| (p.delta_over_r, p.plate_stress)).collect(),
+            markers: false,
+            thin: false,
+        });
         if r.walls == Walls::Die {
-            series.push(Series { label: format!("side, level {}", r.level), points: c.iter().map(|p| (p.delta_over_r, p.side_stress)).collect(), markers: false, thin: true });
+            series.push(Series {
+                label: format!("side, level {}", r.level),
+                points: c.iter().map(|p| (p.delta_over_r, p.side_stress)).collect(),
+                markers: false,
+                thin: true,
+            });
         }
     }
     let title = format!("continuum sphere ({:?}, nu = {})", scene.runs[0].law, scene.runs[0].poisson_ratio);
-    draw(path, &Chart { title: &title, x_label: "plate approach / r", y_label: "wall force / (2r)^2 [Pa]", log_x: false, log_y: false, series })
+    draw(
+        path,
+        &Chart {
+            title: &title,
+            x_label: "plate approach / r",
+            y_label: "wall force / (2r)^2 [Pa]",
+            log_x: false,
+            log_y: false,
+            series,
+        },
+    )
 }

@@ -94,7 +94,9 @@ impl Solver {
             .hex
             .iter()
             .enumerate()
-            .map(|(e, h)| element::geometry(&h.map(|i| p.mesh.x[i])).map_err(|m| format!("mesh element {e}: {m}")))
+            .map(|(e, h)| {
+                element::geometry(&h.map(|i| p.mesh.x[i])).map_err(|m| format!("mesh element {e}: {m}"))
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let n = 3 * p.mesh.x.len();
         let mut idx = Vec::with_capacity(p.mesh.hex.len() * 300 + n);
@@ -111,7 +113,8 @@ impl Solver {
         for d in 0..n {
             idx.push(Pair { row: d, col: d });
         }
-        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &idx).map_err(|e| format!("sparsity pattern: {e:?}"))?;
+        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &idx)
+            .map_err(|e| format!("sparsity pattern: {e:?}"))?;
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for x in &p.mesh.x {
@@ -135,7 +138,8 @@ impl Solver {
         let mut out = Output::default();
         let mut w = 0.0;
         for e in 0..p.mesh.hex.len() {
-            element::evaluate(p.law, &p.lame, p.vol, &self.geo[e], &gather(&p.mesh, e, u), false, &mut out).ok()?;
+            element::evaluate(p.law, &p.lame, p.vol, &self.geo[e], &gather(&p.mesh, e, u), false, &mut out)
+                .ok()?;
             w += out.energy;
         }
         Some(w)
@@ -146,7 +150,8 @@ impl Solver {
         let mut out = Output::default();
         let mut r = vec![0.0; u.len()];
         for (e, h) in p.mesh.hex.iter().enumerate() {
-            element::evaluate(p.law, &p.lame, p.vol, &self.geo[e], &gather(&p.mesh, e, u), false, &mut out).ok()?;
+            element::evaluate(p.law, &p.lame, p.vol, &self.geo[e], &gather(&p.mesh, e, u), false, &mut out)
+                .ok()?;
             for k in 0..24 {
                 r[3 * h[k / 3] + k % 3] += out.grad[k];
             }
@@ -159,7 +164,8 @@ impl Solver {
         let mut out = Output::default();
         let mut k = vec![vec![0.0; u.len()]; u.len()];
         for (e, h) in p.mesh.hex.iter().enumerate() {
-            element::evaluate(p.law, &p.lame, p.vol, &self.geo[e], &gather(&p.mesh, e, u), true, &mut out).ok()?;
+            element::evaluate(p.law, &p.lame, p.vol, &self.geo[e], &gather(&p.mesh, e, u), true, &mut out)
+                .ok()?;
             for r in 0..24 {
                 for c in 0..24 {
                     k[3 * h[r / 3] + r % 3][3 * h[c / 3] + c % 3] += out.hess[r][c];
@@ -186,7 +192,12 @@ impl Solver {
 
     /// Assemble R and K at u and solve K Δu = −R for the free dofs with Δu = target − u on the
     /// constrained ones (their columns moved to the right-hand side). Returns R and Δu.
-    fn newton_direction(&mut self, p: &Problem, u: &[f64], bc: &[Option<f64>]) -> Result<(Vec<f64>, Vec<f64>), String> {
+    fn newton_direction(
+        &mut self,
+        p: &Problem,
+        u: &[f64],
+        bc: &[Option<f64>],
+    ) -> Result<(Vec<f64>, Vec<f64>), String> {
         let n = u.len();
         let mut r = vec![0.0; n];
         let mut rhs = vec![0.0; n];
@@ -215,9 +226,13 @@ impl Solver {
             self.vals.push(if bc[d].is_some() { 1.0 } else { 0.0 });
             rhs[d] = if bc[d].is_some() { du_c[d] } else { rhs[d] - r[d] };
         }
-        let k = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &self.vals).map_err(|e| format!("assembly: {e:?}"))?;
+        let k = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &self.vals)
+            .map_err(|e| format!("assembly: {e:?}"))?;
         if self.llt.is_none() {
-            self.llt = Some(SymbolicLlt::try_new(k.symbolic(), Side::Lower).map_err(|e| format!("Cholesky analysis: {e:?}"))?);
+            self.llt = Some(
+                SymbolicLlt::try_new(k.symbolic(), Side::Lower)
+                    .map_err(|e| format!("Cholesky analysis: {e:?}"))?,
+            );
         }
         let mut x = Mat::<f64>::from_fn(n, 1, |i, _| rhs[i]);
         match Llt::try_new_with_symbolic(self.llt.clone().unwrap(), k.as_ref(), Side::Lower) {
@@ -233,9 +248,14 @@ impl Solver {
                         }
                     }
                 }
-                let full = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).map_err(|e| format!("assembly: {e:?}"))?;
-                let lu = Lu::try_new_with_symbolic(faer::sparse::linalg::solvers::SymbolicLu::try_new(full.symbolic()).map_err(|e| format!("LU: {e:?}"))?, full.as_ref())
-                    .map_err(|e| format!("singular tangent: {e:?}"))?;
+                let full = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
+                    .map_err(|e| format!("assembly: {e:?}"))?;
+                let lu = Lu::try_new_with_symbolic(
+                    faer::sparse::linalg::solvers::SymbolicLu::try_new(full.symbolic())
+                        .map_err(|e| format!("LU: {e:?}"))?,
+                    full.as_ref(),
+                )
+                .map_err(|e| format!("singular tangent: {e:?}"))?;
                 lu.solve_in_place(x.as_mut());
             }
         }
@@ -270,7 +290,9 @@ impl Solver {
                         if s.active[k][node] && sg * r[d] > (set.rtol * reaction).max(floor) {
                             s.active[k][node] = false;
                             changed = true;
-                        } else if !s.active[k][node] && sg * (p.mesh.x[node][pl.axis] + s.u[d] - pl.pos) > 1e-12 * self.length {
+                        } else if !s.active[k][node]
+                            && sg * (p.mesh.x[node][pl.axis] + s.u[d] - pl.pos) > 1e-12 * self.length
+                        {
                             s.active[k][node] = true;
                             changed = true;
                         }
@@ -281,7 +303,12 @@ impl Solver {
                     let mut contact_nodes = Vec::new();
                     for (k, pl) in p.planes.iter().enumerate() {
                         let sg = if pl.upper { 1.0 } else { -1.0 };
-                        plane_force.push(-(0..p.mesh.x.len()).filter(|&m| s.active[k][m]).map(|m| sg * r[3 * m + pl.axis]).sum::<f64>());
+                        plane_force.push(
+                            -(0..p.mesh.x.len())
+                                .filter(|&m| s.active[k][m])
+                                .map(|m| sg * r[3 * m + pl.axis])
+                                .sum::<f64>(),
+                        );
                         contact_nodes.push(s.active[k].iter().filter(|&&a| a).count());
                     }
                     return Ok(Equilibrium { plane_force, contact_nodes, iterations: it, residual: res });
@@ -307,7 +334,9 @@ impl Solver {
                 }
                 alpha *= 0.5;
                 if alpha < 1e-6 {
-                    return Err(format!("line search failed at Newton iteration {it} (free residual {res:.3e} N)"));
+                    return Err(format!(
+                        "line search failed at Newton iteration {it} (free residual {res:.3e} N)"
+                    ));
                 }
             }
             s.u.copy_from_slice(&trial);
@@ -315,7 +344,10 @@ impl Solver {
             for (k, pl) in p.planes.iter().enumerate() {
                 let sg = if pl.upper { 1.0 } else { -1.0 };
                 for node in 0..p.mesh.x.len() {
-                    if !s.active[k][node] && sg * (p.mesh.x[node][pl.axis] + s.u[3 * node + pl.axis] - pl.pos) > 1e-12 * self.length {
+                    if !s.active[k][node]
+                        && sg * (p.mesh.x[node][pl.axis] + s.u[3 * node + pl.axis] - pl.pos)
+                            > 1e-12 * self.length
+                    {
                         s.active[k][node] = true;
                     }
                 }

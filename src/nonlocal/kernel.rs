@@ -726,7 +726,10 @@ mod tests {
             [(90.0, 0.3, -0.158), (90.0, 0.5, -0.204), (60.0, 0.3, -0.084), (60.0, 0.5, -0.129)]
         {
             let truncated = raw(theta, nu, 3400);
-            assert!((truncated - spec).abs() < 1e-3, "theta {theta} nu {nu}: {truncated} vs docs/spec.md §4.1 {spec}");
+            assert!(
+                (truncated - spec).abs() < 1e-3,
+                "theta {theta} nu {nu}: {truncated} vs docs/spec.md §4.1 {spec}"
+            );
             let converged = sphere_pair_displacement(f64::to_radians(theta), nu);
             assert!((converged - spec).abs() > 3e-3);
         }

@@ -198,7 +198,10 @@ impl Deck {
         let seed = seed(a.get(4).ok_or_else(|| format!("{what}: expected SEED N T1 W1 …"))?, &what)?;
         let n = int(a.get(5).ok_or_else(|| format!("{what}: expected SEED N T1 W1 …"))?)?;
         if n < 1 || a.len() != 6 + 2 * n as usize {
-            return Err(format!("{what}: expected {n} template/weight pairs after N, got {} words", a.len() - 6));
+            return Err(format!(
+                "{what}: expected {n} template/weight pairs after N, got {} words",
+                a.len() - 6
+            ));
         }
         let mut parts = Vec::new();
         for j in 0..n as usize {
@@ -237,7 +240,8 @@ impl Deck {
         let (mut vel, mut omega) = (Vec3::zeros(), Vec3::zeros());
         let mut k = 4;
         let arg = |j: usize| a.get(j).copied().ok_or_else(|| format!("{what}: {} needs a value", a[j - 1]));
-        let vec3 = |j: usize| -> R<Vec3> { Ok(Vec3::new(num(arg(j)?)?, num(arg(j + 1)?)?, num(arg(j + 2)?)?)) };
+        let vec3 =
+            |j: usize| -> R<Vec3> { Ok(Vec3::new(num(arg(j)?)?, num(arg(j + 1)?)?, num(arg(j + 2)?)?)) };
         let yes_no = |v: &str, key: &str| match v {
             "yes" => Ok(true),
             "no" => Ok(false),
@@ -255,7 +259,9 @@ impl Deck {
                     dist = Some(v.to_string());
                 }
                 "region" => {
-                    region = Some(self.regions.get(v).cloned().ok_or_else(|| format!("{what}: unknown region {v}"))?)
+                    region = Some(
+                        self.regions.get(v).cloned().ok_or_else(|| format!("{what}: unknown region {v}"))?,
+                    )
                 }
                 "particles_in_region" => {
                     let n = int(v)?;
@@ -271,10 +277,14 @@ impl Deck {
                     }
                     target = Some(Target::VolumeFraction(f));
                 }
-                "mass_in_region" => target = Some(Target::Mass(positive(v, &format!("{what}: mass_in_region"))?)),
+                "mass_in_region" => {
+                    target = Some(Target::Mass(positive(v, &format!("{what}: mass_in_region"))?))
+                }
                 "insert_every" if v == "once" => {}
                 "insert_every" => {
-                    return Err(unsupported(&format!("{what}: insert_every {v} (only once: periodic insertion)")))
+                    return Err(unsupported(&format!(
+                        "{what}: insert_every {v} (only once: periodic insertion)"
+                    )))
                 }
                 "overlapcheck" if v == "yes" => {}
                 "overlapcheck" => return Err(unsupported(&format!("{what}: overlapcheck {v} (only yes)"))),
@@ -283,7 +293,11 @@ impl Deck {
                     exact = match v {
                         "exact" => true,
                         "uncorrelated" => false,
-                        _ => return Err(format!("{what}: random_distribute must be exact or uncorrelated, got '{v}'")),
+                        _ => {
+                            return Err(format!(
+                                "{what}: random_distribute must be exact or uncorrelated, got '{v}'"
+                            ))
+                        }
                     }
                 }
                 "maxattempt" => {
@@ -317,7 +331,9 @@ impl Deck {
             dist: dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
             region: region.ok_or_else(|| format!("{what}: region is required"))?,
             target: target.ok_or_else(|| {
-                format!("{what}: one of particles_in_region, volumefraction_region, mass_in_region is required")
+                format!(
+                    "{what}: one of particles_in_region, volumefraction_region, mass_in_region is required"
+                )
             })?,
             all_in,
             exact,
@@ -345,7 +361,8 @@ impl Deck {
             return Err("the region reaches outside the simulation box".into());
         }
         let dist = &self.insertion.distributions[&pack.dist];
-        let templates: Vec<Template> = dist.parts.iter().map(|(id, _)| self.insertion.templates[id].clone()).collect();
+        let templates: Vec<Template> =
+            dist.parts.iter().map(|(id, _)| self.insertion.templates[id].clone()).collect();
         let frac: Vec<f64> = dist.parts.iter().map(|p| p.1).collect();
         // What is already in the region counts towards the target.
         let p = &self.world.p;
@@ -371,7 +388,9 @@ impl Deck {
                 *c = r.floor() as usize;
             }
             let mut order: Vec<usize> = (0..raw.len()).collect();
-            order.sort_by(|&x, &y| (raw[y] - raw[y].floor()).total_cmp(&(raw[x] - raw[x].floor())).then(x.cmp(&y)));
+            order.sort_by(|&x, &y| {
+                (raw[y] - raw[y].floor()).total_cmp(&(raw[x] - raw[x].floor())).then(x.cmp(&y))
+            });
             let short = n - counts.iter().sum::<usize>();
             for &j in order.iter().take(short) {
                 counts[j] += 1;
