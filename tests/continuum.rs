@@ -16,8 +16,8 @@ fn uniaxial_strain(law: Law, vol: Volumetric, lame: Lame, d: f64) -> (f64, f64) 
     let mesh = cuboid([1.0, 1.0, 1.0], [3, 3, 3], 0.2);
     let mut fixed = Vec::new();
     for (i, x) in mesh.x.iter().enumerate() {
-        for a in 0..3 {
-            if x[a].abs() < 1e-12 {
+        for (a, xa) in x.iter().enumerate() {
+            if xa.abs() < 1e-12 {
                 fixed.push((3 * i + a, 0.0));
             }
         }

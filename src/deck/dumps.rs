@@ -88,8 +88,7 @@ impl Deck {
         Ok(())
     }
 
-    /// `if "cond" then "cmd" ... [elif "cond" "cmd" ...]... [else "cmd" ...]` (LAMMPS): the first
-
+    /// Writes every dump whose interval divides the current step.
     pub(super) fn write_dumps(&mut self) -> R<()> {
         let step = self.world.step;
         for d in &mut self.dumps {

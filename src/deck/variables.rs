@@ -225,14 +225,13 @@ impl Deck {
                 // LAMMPS: an index variable that exists (e.g. from -var) is not redefined. With one
                 // partition (this engine) a universe variable is an index variable: `next` steps
                 // through its values.
-                if !self.vars.contains_key(&name) {
-                    let var = if a.len() == 4 {
+                self.vars.entry(name).or_insert_with(|| {
+                    if a.len() == 4 {
                         Var::Index(a[3].into())
                     } else {
                         Var::List { values: a[3..].iter().map(|v| v.to_string()).collect(), at: 0 }
-                    };
-                    self.vars.insert(name, var);
-                }
+                    }
+                });
             }
             "equal" => {
                 let f = a[3..].join(" ");

@@ -157,6 +157,7 @@ fn add_outer(out: &mut [[f64; 24]; 24], s: f64, a: &[f64; 24], b: &[f64; 24]) {
 
 /// The element's energy Π_e, gradient ∂Π_e/∂u and (if `hessian`) ∂²Π_e/∂u². `Err` if a Gauss point
 /// is inverted (J ≤ 0), which the Newton line search treats as a step too long.
+#[allow(clippy::result_unit_err)] // the one failure has no payload: the caller shortens the step
 pub fn evaluate(
     law: Law,
     lame: &Lame,
@@ -172,7 +173,7 @@ pub fn evaluate(
         out.hess = [[0.0; 24]; 24];
     }
     let groups: &[std::ops::Range<usize>] = match vol {
-        Volumetric::MeanDilatation => &[0..8],
+        Volumetric::MeanDilatation => std::slice::from_ref(&(0..8)),
         Volumetric::Full => &[0..1, 1..2, 2..3, 3..4, 4..5, 5..6, 6..7, 7..8],
     };
     match law {

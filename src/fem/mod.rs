@@ -9,6 +9,10 @@
 //! (`solver`), on a graded octant mesh of the sphere (`mesh`, `octant`). `scene` reads the JSON
 //! scene of `mcdem continuum` and writes its CSV and plot.
 
+// The element and material loops index several fixed-size arrays with one index, as the tensor
+// notation of the formulas they implement does; iterator chains would hide that correspondence.
+#![allow(clippy::needless_range_loop)]
+
 pub mod element;
 pub mod material;
 pub mod mesh;

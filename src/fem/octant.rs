@@ -86,7 +86,7 @@ impl SphereRun {
         }
         let mut prev = 0.0;
         for &d in &self.delta_over_r {
-            if !(d > prev) {
+            if d.is_nan() || d <= prev {
                 return Err(format!("delta_over_r must be positive and increasing, got {d} after {prev}"));
             }
             if d > MAX_DELTA_OVER_R {
