@@ -24,17 +24,14 @@ fn run_deck(text: &str, extra: &[&str]) -> (bool, String, String) {
     (o.status.success(), all, dump)
 }
 
-/// Rows `x y z radius mass` of the last frame of a `dump custom … id x y z radius mass`.
+/// Rows `x y z radius mass` of the last frame of the dump, read by the project's dump parser and
+/// picked by column name.
 fn atoms(dump: &str) -> Vec<[f64; 5]> {
-    let last = dump.rfind("ITEM: ATOMS").expect("a dump frame");
-    dump[last..]
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let v: Vec<f64> = l.split_whitespace().skip(1).map(|s| s.parse().unwrap()).collect();
-            [v[0], v[1], v[2], v[3], v[4]]
-        })
-        .collect()
+    let frames = mcdem::outputs::parse_dump(dump, "out.dump").expect("a readable dump");
+    let last = frames.last().expect("a dump frame");
+    let col = |n: &str| last.column(n).unwrap_or_else(|| panic!("dump has no column {n}"));
+    let c = [col("x"), col("y"), col("z"), col("radius"), col("mass")];
+    last.rows.iter().map(|r| c.map(|k| r[k])).collect()
 }
 
 const BASE: &str = "units si
