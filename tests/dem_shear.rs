@@ -317,3 +317,164 @@ fix integr all nve/sphere
     // Particle 1's trajectory is the same; particle 2's x velocity differs by the jump.
     assert!((a[0][4] - b[0][4]).abs() < 1e-12 && (a[1][4] + rate * l - b[1][4]).abs() < 1e-9);
 }
+
+/// Dense frictional `mc_advanced` Lees–Edwards shear: 4 nc³ spheres at φ = 0.8 (fcc, overlaps of
+/// 2.6 % of d), μ = 0.5, γ̇ = 100 /s for 3000 steps of 0.5 µs (strain 0.15), skin 0.05 mm (a
+/// rebuild every ~0.02 strain), final positions and velocities to 17 digits. `extra` goes before
+/// the run, `pool` sets the thread-pool size, `mode` is `--threads-mode`.
+fn dense_shear(nc: usize, steps: u64, extra: &str, mode: &str, pool: &str) -> (Vec<Vec<f64>>, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let l = fcc(dir.path(), nc, 0.8, 0.002);
+    let rate = 100.0;
+    let deck = HEAD
+        .replace("E\n", "0.7\n")
+        .replace("MU\n", "0.5\n")
+        .replace("timestep 1e-6", "timestep 5e-7")
+        .replace("neighbor 0.0002 bin", "neighbor 0.00005 bin")
+        .replace("model hertz", "model mc_advanced")
+        .replace(
+            "pair_coeff * *",
+            "fix m5 all property/global geometricPrefactor peratomtype 0.702\n\
+             fix m6 all property/global maxPenetrationRatio peratomtype 0.109\npair_coeff * *",
+        )
+        + &format!(
+            "{extra}\nvelocity all ramp vx {} {} y 0 {l} sum yes units box\n\
+             fix sh all deform 1 xy erate {rate} remap v\n\
+             thermo_style custom step c_z\nthermo 10\nrun {steps}\n\
+             dump d all custom 1 dump.sh id x y z vx vy vz\n\
+             dump_modify d format \"%d %.17g %.17g %.17g %.17g %.17g %.17g\"\n\
+             run 0\n",
+            -0.5 * rate * l,
+            0.5 * rate * l
+        );
+    std::fs::write(dir.path().join("in.t"), deck).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+        .current_dir(dir.path())
+        .env("RAYON_NUM_THREADS", pool)
+        .args(["run", "in.t", "-log", "none", "--no-progress", "--threads-mode", mode])
+        .output()
+        .unwrap();
+    let out = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{out}");
+    let text = std::fs::read_to_string(dir.path().join("dump.sh")).unwrap();
+    let mut rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
+        .skip(1)
+        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap()).collect())
+        .collect();
+    rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    assert_eq!(rows.len(), 4 * nc * nc * nc);
+    (rows, out)
+}
+
+/// The (step, Z) thermo rows of a run.
+fn coordination(out: &str) -> Vec<(u64, f64)> {
+    out.lines()
+        .filter_map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            (w.len() == 2).then(|| Some((w[0].parse().ok()?, w[1].parse().ok()?))).flatten()
+        })
+        .collect()
+}
+
+/// Neighbour builds of a run's `Loop time` lines.
+fn builds(out: &str) -> u64 {
+    out.lines()
+        .filter(|l| l.starts_with("Loop time of"))
+        .map(|l| {
+            let (head, _) = l.split_once(" neighbour builds").unwrap();
+            head.rsplit_once(' ').unwrap().1.parse::<u64>().unwrap()
+        })
+        .sum()
+}
+
+/// The Lees–Edwards skin test (rebuild when relative motion plus the sheared-image drift could
+/// close the skin) against the reference that rebuilds every step (`neigh_modify every 1 check
+/// no`), over strain 0.5. A list that misses a pair loses that contact at once: the coordination
+/// number Z, printed every 10 steps, must be the same number at every print (contact counts do
+/// not feel round-off unless an overlap sits within ~1e-16 m of zero). The positions then agree
+/// to round-off amplified by the dense packing's chaos (measured 1.0e-13 m = 5e-11 d with 166
+/// builds against 10 000; bound 1e-9 d). Checked to fail: a list never rebuilt stops the run
+/// at step 10 000 (overlap 1.26 mm > radius across the sheared boundary). Dropping only the
+/// strain term of the test is *not* caught in this dense scene: the non-affine motion fires the
+/// skin test first (36–143 builds, Z identical, positions within 6e-13 m), so that term is
+/// pinned by the affine-only case in `lees_edwards_skin_includes_the_image_drift` instead.
+#[test]
+fn lees_edwards_skin_test_matches_rebuilding_every_step() {
+    let (skin, out_skin) = dense_shear(3, 10000, "", "serial", "1");
+    let (every, out_every) = dense_shear(3, 10000, "neigh_modify every 1 check no", "serial", "1");
+    let (b_skin, b_every) = (builds(&out_skin), builds(&out_every));
+    eprintln!("neighbour builds: skin test {b_skin}, every step {b_every}");
+    assert!(b_every >= 10000, "check no rebuilt only {b_every} times");
+    assert!((3..2000).contains(&b_skin), "the skin test rebuilt {b_skin} times: not a test of the skin");
+    let (z_skin, z_every) = (coordination(&out_skin), coordination(&out_every));
+    assert!(z_skin.len() >= 1000, "{} thermo rows", z_skin.len());
+    if let Some((a, b)) = z_skin.iter().zip(&z_every).find(|(a, b)| a != b) {
+        panic!("coordination differs: skin test {a:?}, rebuild every step {b:?}");
+    }
+    let mut worst = 0.0f64;
+    for (a, b) in skin.iter().zip(&every) {
+        assert_eq!(a[0], b[0]);
+        for k in 1..4 {
+            worst = worst.max((a[k] - b[k]).abs());
+        }
+    }
+    eprintln!("max position difference {worst:e} m");
+    assert!(worst < 1e-9 * 0.002, "skin-test run off the rebuild-every-step run by {worst:e} m");
+}
+
+/// Shear on two threads gives the one-thread result bit for bit (Lees–Edwards images, tangential
+/// history and the multi-contact radius changes all split across the blocks); 500 spheres so
+/// that the pair pass is split into blocks at all.
+#[test]
+fn dense_shear_on_two_threads_is_bit_identical() {
+    let (one, _) = dense_shear(5, 3000, "", "serial", "2");
+    let (two, out) = dense_shear(5, 3000, "", "parallel", "2");
+    assert!(out.contains("2 threads, threaded in 100 % of steps"), "{out}");
+    assert!(one == two, "two threads changed the sheared packing");
+}
+
+/// The image-drift term of the Lees–Edwards skin test, alone: two spheres (d = 2 mm) on either
+/// side of the sheared y boundary of a 12 mm box (γ̇ = 100 /s), 1.8 mm apart in y through the
+/// boundary, each moving exactly with the affine flow v_x = γ̇ (y − y_mid) (∓0.51 m/s), so that
+/// their displacement from the affine field stays zero and only the strain term of the skin test
+/// can trigger a rebuild. Across the boundary the image of A streams past B at γ̇ · 1.8 mm =
+/// 0.18 m/s. The x gap starts at 1.412 mm (centre distance 2.288 mm, outside the 2.2 mm list
+/// cutoff, so the first list does not hold the pair) and contact needs √(d² − 1.8²) = 0.872 mm,
+/// reached at t = 3.0 ms (step 3000). A skin test that forgets the strain never rebuilds and the
+/// contact never forms (checked by removing the term); the test asserts the onset at step
+/// 3000 ± 10 (the thermo interval), at least one rebuild, and that Z agrees, print by print,
+/// with a list rebuilt every step.
+#[test]
+fn lees_edwards_skin_includes_the_image_drift() {
+    let run = |extra: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let data = "pair\n\n2 atoms\n1 atom types\n0 0.012 xlo xhi\n0 0.012 ylo yhi\n0 0.012 zlo zhi\n\n\
+                    Atoms\n\n1 1 0.002 1000 0.004 0.0009 0.006\n2 1 0.002 1000 0.005412 0.0111 0.006\n\n\
+                    Velocities\n\n1 -0.51 0 0 0 0 0\n2 0.51 0 0 0 0 0\n";
+        std::fs::write(dir.path().join("data.lat"), data).unwrap();
+        let deck = HEAD.replace("E\n", "0.7\n").replace("MU\n", "0.5\n")
+            + &format!(
+                "{extra}\nfix sh all deform 1 xy erate 100 remap v\n\
+                 thermo_style custom step c_z\nthermo 10\nrun 4000\n"
+            );
+        std::fs::write(dir.path().join("in.t"), deck).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+            .current_dir(dir.path())
+            .args(["run", "in.t", "-log", "none", "--no-progress"])
+            .output()
+            .unwrap();
+        let out = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success(), "{out}");
+        (coordination(&out), builds(&out))
+    };
+    let (z_skin, b_skin) = run("");
+    let (z_every, _) = run("neigh_modify every 1 check no");
+    eprintln!("skin test: {b_skin} builds");
+    assert_eq!(z_skin.len(), 401);
+    assert!(b_skin >= 1, "the skin test never rebuilt the list");
+    let onset = z_every.iter().find(|(_, z)| *z > 0.0).map(|(s, _)| *s);
+    assert!(onset.is_some_and(|s| s.abs_diff(3000) <= 10), "contact onset at {onset:?}, expected step 3000");
+    assert_eq!(z_skin, z_every, "the skin test missed the contact across the sheared boundary");
+}

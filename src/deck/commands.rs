@@ -179,7 +179,19 @@ fn neigh_modify(d: &mut Deck, a: &[&str]) -> R<()> {
                 }
                 k += 2
             }
-            "check" => k += 2,
+            "check" => {
+                d.world.rebuild_every_step = match a.get(k + 1).copied() {
+                    Some("yes") => false,
+                    Some("no") => true,
+                    other => {
+                        return Err(format!(
+                            "neigh_modify check {}: expected yes or no",
+                            other.unwrap_or("(missing)")
+                        ))
+                    }
+                };
+                k += 2
+            }
             "contact_distance_factor" => {
                 // LIGGGHTS widens the neighbour search for contacts that may appear
                 // through multi-contact radius growth; the engine's detection reach is

@@ -159,20 +159,22 @@ impl Deck {
                 self.world.mc_updates - passes0
             );
         }
-        // The engine times steps with and without its threads and keeps the faster (results
-        // are the same bits either way): say how often the threads were used.
-        let threads = rayon::current_num_threads();
-        let used = if threads > 1 {
+        // One process, a thread pool inside it: say how many threads the force passes could use
+        // and how often they did (the engine times steps with and without its threads and keeps
+        // the faster; results are the same bits either way). Under `--threads-mode serial` the
+        // pool is never used, so the line says one thread whatever the pool size.
+        let pool = rayon::current_num_threads();
+        let threads = if pool == 1 || self.world.pair_threads == crate::engine::PairThreads::Serial {
+            "1 thread".to_string()
+        } else {
             let (a, b) = self.world.threaded_passes();
             let passes = (a + b) - (threaded0.0 + threaded0.1);
             // (The run's set-up pass counts too: at most 100 %.)
             let pct = (100.0 * passes as f64 / (nsteps as f64).max(1.0)).min(100.0);
-            format!(" (threaded in {pct:.0} % of steps)")
-        } else {
-            String::new()
+            format!("{pool} threads, threaded in {pct:.0} % of steps")
         };
         self.say(&format!(
-            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {threads} threads{used}, {} neighbour builds{approx})\n",
+            "Loop time of {secs:.6} on 1 procs for {nsteps} steps with {np} atoms ({rate:.4e} particle-steps/s, {threads}, {} neighbour builds{approx})\n",
             self.world.builds - builds0
         ));
         // Whether the Eq. 3 cap acted: contacts the multi-contact kernel evaluated, and how many of

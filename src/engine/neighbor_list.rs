@@ -34,7 +34,7 @@ impl World {
     /// interval no longer shrinks with the box size: the lab displacement of particles near the
     /// boundary grows with L_y, the relative motion of neighbours does not.
     pub(super) fn neighbor_check(&mut self) -> Result<(), StepError> {
-        if !self.lists.need_build {
+        if !self.lists.need_build && !self.rebuild_every_step {
             let Some(domain) = self.domain else { return Ok(()) };
             // Lees–Edwards strain since the build (0 without shear).
             let strain = if self.lists.le_travel == 0.0 {

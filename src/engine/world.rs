@@ -57,6 +57,9 @@ pub struct World {
     pub walls: Vec<WallFix>,
     pub meshes: Vec<Mesh>,
     pub skin: f64,
+    /// `neigh_modify check no`: rebuild the neighbour list every step instead of when the skin
+    /// test fires (LAMMPS' `every 1 check no`); the reference the skin test is checked against.
+    pub rebuild_every_step: bool,
     /// Multi-contact range factor: wall contacts are sought out to this multiple of the radius;
     /// pair lists out to it as well, but never beyond what a pair can use ([`World::pair_reach`]).
     pub mc_range: f64,
