@@ -20,7 +20,7 @@ use std::time::Instant;
 use serde::Deserialize;
 
 use super::{richardson, Law, Point, SphereRun, Volumetric, Walls};
-use crate::validate::plot::{draw, Chart, Series};
+use crate::harness::plot::{draw, Chart, Series};
 
 #[derive(Deserialize)]
 #[serde(untagged)]

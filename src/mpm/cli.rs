@@ -9,7 +9,7 @@ use super::constitutive::{inverse, Constitutive, Law, Mat};
 use super::implicit::{step, Workspace};
 use super::points::Points;
 use super::scene::Scene;
-use crate::validate::plot::{draw, Chart, Series};
+use crate::harness::plot::{draw, Chart, Series};
 
 /// Plane-strain effective modulus E* = E/(1 − ν²) = 4μ(λ + μ)/(λ + 2μ) of Eq. 19.
 pub fn plane_strain_modulus(lambda: f64, mu: f64) -> f64 {

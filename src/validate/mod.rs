@@ -14,10 +14,6 @@ pub mod physics;
 pub mod progress;
 pub mod uniaxial;
 
-/// The report plots live in `crate::harness` (shared with `bench` and `study`); re-exported for the
-/// MPM command line, which draws with them by this path.
-pub use crate::harness::plot;
-
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
