@@ -1,7 +1,10 @@
 //! `mcdem study shear` in miniature: Bagnold scaling below jamming, rate independence above it,
 //! resumability and the output files.
 
-use mcdem::study::shear::{run, Grid, Options, Protocol, RunResult};
+use mcdem::study::shear::{
+    classify, run, run_one, run_refined, Grid, Options, Protocol, RunResult, RunSpec, Stop, NUMERICAL,
+    OUT_OF_RANGE,
+};
 
 fn grid(name: &str, phi: f64, mu: f64, rates: [f64; 2], window: f64) -> Grid {
     Grid {
@@ -160,4 +163,83 @@ fn response_surface_has_rows_only_where_runs_finished() {
         assert!(r.points >= 3 && r.alpha.is_finite() && r.beta.is_finite(), "{r:?}");
     }
     assert_eq!(phi_c.len(), 1);
+}
+
+/// The dense frictional reproducer of docs/shear.md ("Runs that stop"): 64 spheres at φ = 0.9,
+/// μ = 1, ν = 0.5, γ̂ = 1e-2 with the calibrated advanced MC law.
+fn dense_spec(gamma_mc: f64, mpr: f64, mu: f64) -> (RunSpec, Protocol) {
+    let spec =
+        RunSpec { phi: 0.9, mu, nu: 0.5, gamma_hat: 1e-2, n: 64, gamma_mc, mpr, restitution: 0.7, seed: 1 };
+    let proto = Protocol {
+        compress_steps: 1000,
+        window: 0.25,
+        strain_min: 1.0,
+        strain_max: 2.0,
+        block: 2,
+        tol: 0.1,
+        avg_windows: 2,
+        samples_per_window: 20,
+    };
+    (spec, proto)
+}
+
+/// The stop converges in Δt (same contact, strain 0.266 / 0.277 / 0.265 at Δt, Δt/2, Δt/4 when
+/// measured), so it is reported as out of the model's range; Hertz (γ = 0) and the frictionless
+/// packing run on at the same φ. Fails if the stop came from the integrator (it would move or
+/// vanish at Δt/2) or if the classification or the overlap check were lost.
+#[test]
+fn dense_frictional_stop_is_out_of_the_model_range_and_hertz_runs_on() {
+    let (gm, mpr) = Grid::quick().law(0.5).unwrap();
+    let (spec, proto) = dense_spec(gm, mpr, 1.0);
+    let e = run_one(&spec, &proto).expect_err("advanced MC at φ = 0.9, μ = 1 should stop");
+    assert!(e.starts_with(OUT_OF_RANGE), "{e}");
+    assert!(e.contains("with Δt/2") && e.contains("reached the particle radius"), "{e}");
+    let s1 = run_refined(&spec, &proto, 1).expect_err("stops at Δt");
+    let s2 = run_refined(&spec, &proto, 2).expect_err("stops at Δt/2");
+    let (g1, g2) = (s1.strain.unwrap(), s2.strain.unwrap());
+    eprintln!("stop strain {g1:.4} at dt, {g2:.4} at dt/2");
+    assert!(g1 > 0.05 && (g1 - g2).abs() < 0.1 * g1, "{g1} {g2}");
+    // Hertz at the same state: no stop, nothing rescued.
+    let (hz, _) = dense_spec(0.0, 1e9, 1.0);
+    let r = run_one(&hz, &proto).expect("Hertz runs on");
+    assert!(r.stopped_at_full_step.is_none() && r.p_hat > 0.0);
+    // Frictionless: the advanced law runs on (particles slide instead of being held in place).
+    let (fl, _) = dense_spec(gm, mpr, 0.0);
+    assert!(run_one(&fl, &proto).is_ok());
+}
+
+/// `classify` on scripted outcomes: converged stops are out of range, moving ones numerical, a stop
+/// cured at Δt/2 returns that run and records where the Δt run stopped, other errors pass through.
+#[test]
+fn stop_classification_follows_the_time_step_refinement() {
+    let (gm, mpr) = Grid::quick().law(0.5).unwrap();
+    let (mut spec, proto) = dense_spec(gm, mpr, 0.0);
+    spec.n = 32;
+    let ok = run_refined(&spec, &proto, 1).expect("frictionless run finishes");
+    let radius = |g: f64| Stop {
+        strain: Some(g),
+        message: "overlap 1e-3 m reached the particle radius 1e-3 m".into(),
+    };
+    let script = |out: Vec<Option<f64>>| {
+        let ok = ok.clone();
+        move |k: u32| {
+            let i = k.trailing_zeros() as usize;
+            match out[i] {
+                Some(g) => Err(radius(g)),
+                None => Ok(ok.clone()),
+            }
+        }
+    };
+    let e = classify(script(vec![Some(0.30), Some(0.31), None])).unwrap_err();
+    assert!(e.starts_with(OUT_OF_RANGE), "{e}");
+    let e = classify(script(vec![Some(0.30), Some(0.90), Some(0.88)])).unwrap_err();
+    assert!(e.starts_with(OUT_OF_RANGE) && e.contains("Δt/4"), "{e}");
+    let e = classify(script(vec![Some(0.30), Some(0.90), Some(0.50)])).unwrap_err();
+    assert!(e.starts_with(NUMERICAL), "{e}");
+    let r = classify(script(vec![Some(0.30), None, None])).unwrap();
+    assert_eq!(r.stopped_at_full_step, Some(0.30));
+    let r = classify(script(vec![None, None, None])).unwrap();
+    assert_eq!(r.stopped_at_full_step, None);
+    let e = classify(|_| Err(Stop { strain: None, message: "random placement failed".into() })).unwrap_err();
+    assert!(!e.starts_with(OUT_OF_RANGE) && !e.starts_with(NUMERICAL) && e.contains("compression"), "{e}");
 }

@@ -25,7 +25,8 @@ mod surface;
 pub use grid::{run, CostRow, Grid, Options, Summary};
 pub use paper::{paper_values, PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 pub use protocol::{
-    k_n, run_one, time_step, time_unit, Protocol, RunResult, RunSpec, DENSITY, DIAMETER, DT_OVERLAP,
-    DT_PER_CONTACT, PHI_START, RESTITUTION, SKIN, YOUNGS_MODULUS,
+    classify, k_n, run_one, run_refined, time_step, time_unit, Protocol, RunResult, RunSpec, Stop, DENSITY,
+    DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START, RESTITUTION, SKIN,
+    YOUNGS_MODULUS,
 };
 pub use surface::{phi_c_floor, response_surface, SurfaceRow};

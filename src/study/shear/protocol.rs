@@ -170,6 +170,11 @@ pub struct RunResult {
     pub steps: u64,
     pub wall_s: f64,
     pub particle_steps_per_s: f64,
+    /// Set when the run at the study's Δt stopped at the contact law's range limit and this result
+    /// comes from the rerun at Δt/2 that finished: the shear strain of that stop (0: in the
+    /// compression). Such a stop was numerical.
+    #[serde(default)]
+    pub stopped_at_full_step: Option<f64>,
 }
 
 pub(super) fn nan() -> f64 {
@@ -226,16 +231,27 @@ pub(super) fn random_positions(n: usize, l: f64, d: f64, rng: &mut Rng) -> Resul
     Ok(out)
 }
 
-/// A World at φ (after the affine compression), not yet sheared.
-pub(super) fn prepare(spec: &RunSpec, compress_steps: u64) -> Result<(World, f64), String> {
-    prepare_sorted(spec, compress_steps, true)
+/// A World at φ (after the affine compression), not yet sheared, with the step divided by `refine` and the compression given `refine` times as many
+/// steps, so that it runs at the same rate in time.
+fn prepare_refined(spec: &RunSpec, compress_steps: u64, refine: u32) -> Result<(World, f64), Stop> {
+    prepare_with(spec, compress_steps * u64::from(refine), true, refine)
+        .map_err(|message| Stop { strain: None, message })
 }
 
-/// [`prepare`], with or without spatial sorting (the cost measurement times both).
+/// A World at φ (after the affine compression), not yet sheared, with or without spatial sorting (the cost measurement times both).
 pub(super) fn prepare_sorted(
     spec: &RunSpec,
     compress_steps: u64,
     sort: bool,
+) -> Result<(World, f64), String> {
+    prepare_with(spec, compress_steps, sort, 1)
+}
+
+fn prepare_with(
+    spec: &RunSpec,
+    compress_steps: u64,
+    sort: bool,
+    refine: u32,
 ) -> Result<(World, f64), String> {
     let d = DIAMETER;
     let vs = spec.n as f64 * std::f64::consts::PI / 6.0 * d.powi(3);
@@ -255,7 +271,7 @@ pub(super) fn prepare_sorted(
     w.mc_range = 1.25;
     w.skin = SKIN * d;
     w.integrate = true;
-    w.dt = time_step(spec.nu);
+    w.dt = time_step(spec.nu) / f64::from(refine);
     let gdot = spec.gamma_hat / time_unit(spec.nu);
     // Small zero-mean random velocities (half the shear velocity across one diameter).
     let v0 = 0.5 * gdot * d;
@@ -339,10 +355,103 @@ pub(super) fn start_shear(w: &mut World, gdot: f64, l: f64) {
     }
 }
 
-/// Runs one grid point single-threaded (the caller decides the thread pool).
+/// A run that stopped: the shear strain reached (None: during the compression) and why.
+#[derive(Debug, Clone)]
+pub struct Stop {
+    pub strain: Option<f64>,
+    pub message: String,
+}
+
+impl Stop {
+    /// The engine's contact-range stop (`physics::pair`): an overlap reached a particle radius.
+    pub fn is_overlap_limit(&self) -> bool {
+        self.message.contains("reached the particle radius")
+    }
+
+    fn at(&self) -> String {
+        match self.strain {
+            Some(g) => format!("shear strain {g:.3}"),
+            None => "the compression".to_string(),
+        }
+    }
+}
+
+/// Leading words of a stop whose place converges as Δt is halved: the contact law, not the
+/// integrator, reached its limit (overlap = radius), so the state is out of the model's range.
+pub const OUT_OF_RANGE: &str = "out of the model's range";
+/// Leading words of a range stop that moved with Δt.
+pub const NUMERICAL: &str = "numerical";
+
+/// Whether two stops at Δt and Δt/2 are the same event. A dense sheared packing is chaotic: any
+/// perturbation, Δt included, moves its trajectory, and the measured place of a range stop moves by
+/// a few per cent with Δt (docs/shear.md, "Runs that stop"); a stop made by the integrator (an
+/// unstable step) moves by O(1) or vanishes. 10 % of the strain plus 0.02 separates the two.
+fn same_stop(a: &Stop, b: &Stop) -> bool {
+    match (a.strain, b.strain) {
+        (None, None) => true,
+        (Some(x), Some(y)) => (x - y).abs() <= 0.1 * x.max(y) + 0.02,
+        _ => false,
+    }
+}
+
+/// Runs one grid point single-threaded; a run that stops at the contact law's range limit is run
+/// again at Δt/2 (and Δt/4 if the two stops differ) and classified by [`classify`].
 pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
+    classify(|refine| run_refined(spec, proto, refine))
+}
+
+/// Classifies a run by its stops as Δt is refined (`run(k)` runs at Δt/k):
+/// - it finishes at Δt: its result;
+/// - it stops for another reason than the contact range: that error, with the place;
+/// - it stops at Δt but finishes at Δt/2 or Δt/4: that result, with
+///   [`RunResult::stopped_at_full_step`] set (the stop depended on the step);
+/// - the stop at Δt/2 is the same event as at Δt (or at Δt/4 as at Δt/2, see [`same_stop`]): an
+///   error beginning with [`OUT_OF_RANGE`], since the stop converges in Δt: the contact law met its
+///   limit, not the integrator;
+/// - otherwise an error beginning with [`NUMERICAL`].
+pub fn classify(mut run: impl FnMut(u32) -> Result<RunResult, Stop>) -> Result<RunResult, String> {
+    let mut stops: Vec<Stop> = Vec::new();
+    for refine in [1u32, 2, 4] {
+        match run(refine) {
+            Ok(mut r) => {
+                r.stopped_at_full_step = stops.first().map(|s| s.strain.unwrap_or(0.0));
+                return Ok(r);
+            }
+            Err(s) if !s.is_overlap_limit() => {
+                return Err(format!("at {} (Δt/{refine}): {}", s.at(), s.message))
+            }
+            Err(s) => {
+                let converged = stops.last().is_some_and(|p| same_stop(p, &s));
+                stops.push(s);
+                if converged {
+                    break;
+                }
+            }
+        }
+    }
+    let places: Vec<String> =
+        stops.iter().zip(["Δt", "Δt/2", "Δt/4"]).map(|(s, h)| format!("{} with {h}", s.at())).collect();
+    let k = stops.len();
+    if same_stop(&stops[k - 2], &stops[k - 1]) {
+        Err(format!(
+            "{OUT_OF_RANGE}: stopped at {} (the stop converges in Δt: the contact law, not the integrator, \
+             met its limit): {}",
+            places.join(", "),
+            stops[0].message
+        ))
+    } else {
+        Err(format!(
+            "{NUMERICAL}: stopped at {} (the stop depends on Δt): {}",
+            places.join(", "),
+            stops[0].message
+        ))
+    }
+}
+
+/// One run at the step Δt/`refine` (the study's Δt for `refine` = 1), no retry.
+pub fn run_refined(spec: &RunSpec, proto: &Protocol, refine: u32) -> Result<RunResult, Stop> {
     let t0 = Instant::now();
-    let (mut w, l) = prepare(spec, proto.compress_steps)?;
+    let (mut w, l) = prepare_refined(spec, proto.compress_steps, refine)?;
     let kn = k_n(spec.nu);
     let gdot = spec.gamma_hat / time_unit(spec.nu);
     let dt = w.dt;
@@ -357,7 +466,10 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
         w.mc_kernel_contacts = 0;
         w.mc_kernel_fallbacks = 0;
         for s in 1..=steps_per_window {
-            w.step().map_err(|e| format!("shear: {e}"))?;
+            if let Err(e) = w.step() {
+                let strain = (windows.len() as f64 + s as f64 / steps_per_window as f64) * proto.window;
+                return Err(Stop { strain: Some(strain), message: format!("shear: {e}") });
+            }
             if s % every == 0 {
                 acc.add(&sample(&w));
             }
@@ -412,7 +524,7 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
     let p = tot.p();
     let sxy = tot.sxy / tot.n;
     let wall = t0.elapsed().as_secs_f64();
-    let steps = proto.compress_steps + shear_steps;
+    let steps = proto.compress_steps * u64::from(refine) + shear_steps;
     Ok(RunResult {
         spec: spec.clone(),
         protocol: proto.clone(),
@@ -439,5 +551,6 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
         steps,
         wall_s: wall,
         particle_steps_per_s: (spec.n as u64 * steps) as f64 / wall,
+        stopped_at_full_step: None,
     })
 }

@@ -5,7 +5,10 @@ use std::fmt::Write as _;
 
 use super::grid::{law_text, write_atomic, CostRow, Options};
 use super::paper::{PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
-use super::protocol::{RunResult, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, PHI_START, YOUNGS_MODULUS};
+use super::protocol::{
+    RunResult, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START,
+    YOUNGS_MODULUS,
+};
 use super::surface::{key3, qs_points, SurfaceRow};
 use crate::harness::plot::{self, Chart, Series};
 
@@ -77,6 +80,7 @@ pub(super) fn write_outputs(
     let grid_ran = !(results.is_empty() && failed.is_empty());
     if grid_ran {
         w("runs.csv", &csv)?;
+        w("stops.csv", &stops_csv(results, failed))?;
     }
     let mut rs = String::from("mu,nu,phi_c,alpha,beta,alpha_paper,beta_paper,points,rms_log\n");
     for r in surface {
@@ -424,10 +428,27 @@ pub(super) fn report(
                 r.particle_steps_per_s
             );
         }
-        if !failed.is_empty() {
-            let _ = writeln!(s, "\n## Runs that stopped\n\n| run | cause |\n|---|---|");
+        let rescued: Vec<&RunResult> = results.iter().filter(|r| r.stopped_at_full_step.is_some()).collect();
+        if !failed.is_empty() || !rescued.is_empty() {
+            let _ = writeln!(
+                s,
+                "\n## Runs that stopped\n\nA run that stops at the contact law's limit (an overlap reaches a \
+                 radius) is run again at Δt/2. *{OUT_OF_RANGE}*: it stops again at the same place, so the stop \
+                 converges in Δt and the state lies beyond what the law can represent (a result about the \
+                 model, not a failure). *{NUMERICAL}*: it moved with Δt. Runs that finished at Δt/2 are listed \
+                 too: their results above are from the Δt/2 run. All of them are in stops.csv.\n\n\
+                 | run | class | cause |\n|---|---|---|"
+            );
             for (k, e) in failed {
-                let _ = writeln!(s, "| {k} | {} |", e.replace('|', "/"));
+                let _ = writeln!(s, "| {k} | {} | {} |", stop_class(e), e.replace('|', "/"));
+            }
+            for r in rescued {
+                let _ = writeln!(
+                    s,
+                    "| {} | finished at Δt/2 | stopped at shear strain {:.3} with Δt (0: in the compression) |",
+                    r.spec.key(),
+                    r.stopped_at_full_step.unwrap_or(f64::NAN)
+                );
             }
         }
     }
@@ -466,6 +487,31 @@ pub(super) fn report(
     let _ = writeln!(s, "\n## Plots\n");
     for p in plots {
         let _ = writeln!(s, "![{p}]({p})");
+    }
+    s
+}
+
+/// The class of a stop from the leading words of its message (`protocol::run_one`); a stop recorded
+/// before stops were classified has none.
+fn stop_class(e: &str) -> &'static str {
+    if e.starts_with(OUT_OF_RANGE) {
+        OUT_OF_RANGE
+    } else if e.starts_with(NUMERICAL) {
+        NUMERICAL
+    } else {
+        "unclassified"
+    }
+}
+
+/// stops.csv: every run that stopped, and every run that finished only at Δt/2.
+fn stops_csv(results: &[RunResult], failed: &[(String, String)]) -> String {
+    let mut s = String::from("run,class,stopped_at_full_step,message\n");
+    for (k, e) in failed {
+        let _ = writeln!(s, "{k},{},,\"{}\"", stop_class(e), e.replace('"', "'"));
+    }
+    for r in results.iter().filter(|r| r.stopped_at_full_step.is_some()) {
+        let _ =
+            writeln!(s, "{},finished at dt/2,{},", r.spec.key(), r.stopped_at_full_step.unwrap_or(f64::NAN));
     }
     s
 }
