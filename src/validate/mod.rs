@@ -16,6 +16,8 @@ pub mod uniaxial;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+use crate::harness::plot;
 use std::time::Instant;
 
 use serde::Serialize;
