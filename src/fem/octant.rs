@@ -32,8 +32,8 @@ pub struct SphereRun {
     pub poisson_ratio: f64,
     pub law: Law,
     pub vol: Volumetric,
-    /// Mesh level ℓ ≥ 1: n = 4·2^{ℓ−1} intervals per block edge.
-    pub level: u32,
+    /// Intervals per octant block edge (mesh level ℓ has `intervals(ℓ)` = 4·2^{ℓ−1}).
+    pub intervals: usize,
     pub walls: Walls,
     /// Plate approach Δ/r at which the forces are reported, increasing.
     pub delta_over_r: Vec<f64>,
@@ -58,6 +58,11 @@ pub struct Point {
 /// spread past the refined part of the blocks (the contact radius reaches ~0.6 r at Δ/r = 0.5).
 pub const MAX_DELTA_OVER_R: f64 = 0.5;
 
+/// Fewest and most intervals per block edge: below 2 the graded contact zone has no interior
+/// node row; 128 is mesh level 6, beyond which the direct solve outgrows memory.
+pub const MIN_INTERVALS: usize = 2;
+pub const MAX_INTERVALS: usize = 128;
+
 /// Intervals per block edge at mesh level ℓ.
 pub fn intervals(level: u32) -> usize {
     4usize << (level.saturating_sub(1))
@@ -78,8 +83,11 @@ impl SphereRun {
                 self.poisson_ratio
             ));
         }
-        if self.level == 0 || self.level > 6 {
-            return Err(format!("mesh_level must be 1 to 6, got {}", self.level));
+        if !(MIN_INTERVALS..=MAX_INTERVALS).contains(&self.intervals) {
+            return Err(format!(
+                "mesh intervals per block edge must be {MIN_INTERVALS} to {MAX_INTERVALS} (mesh_level 1 to 6), got {}",
+                self.intervals
+            ));
         }
         if self.delta_over_r.is_empty() {
             return Err("delta_over_r: no load steps".into());
@@ -101,7 +109,7 @@ impl SphereRun {
 
     /// The boundary-value problem at zero load.
     pub fn problem(&self) -> Problem {
-        let mesh: Mesh = sphere_octant(self.radius, intervals(self.level));
+        let mesh: Mesh = sphere_octant(self.radius, self.intervals);
         let tol = 1e-9 * self.radius;
         let mut fixed = Vec::new();
         for (i, x) in mesh.x.iter().enumerate() {
@@ -180,8 +188,8 @@ impl SphereRun {
                         step *= 0.5;
                         if step < min_step {
                             return Err(format!(
-                                "no equilibrium between delta/r = {at:.5} and {target:.5} even with 1/256 of the step (mesh level {}, {:?}, nu = {}): {e}",
-                                self.level, self.law, self.poisson_ratio
+                                "no equilibrium between delta/r = {at:.5} and {target:.5} even with 1/256 of the step ({} intervals per edge, {:?}, nu = {}): {e}",
+                                self.intervals, self.law, self.poisson_ratio
                             ));
                         }
                     }

@@ -9,7 +9,8 @@
 //!
 //! `law`: `linear` | `neo_hookean`; `locking` (optional, default `mean_dilatation`): `none` |
 //! `mean_dilatation`; `mesh_level`: one level or three consecutive ones (then every number gets a
-//! Richardson extrapolation and error bar); `walls`: `plates` | `die`; `delta_over_r`: a list of
+//! Richardson extrapolation and error bar), or instead `mesh_intervals`: intervals per block edge,
+//! one value or three with a constant refinement ratio (e.g. `[8, 12, 18]`); `walls`: `plates` | `die`; `delta_over_r`: a list of
 //! increasing plate approaches Δ/r or `{"to", "step"}`. Writes `continuum.csv` and
 //! `continuum.png` into DIR.
 
@@ -19,6 +20,7 @@ use std::time::Instant;
 
 use serde::Deserialize;
 
+use super::octant::intervals;
 use super::{richardson, Law, Point, SphereRun, Volumetric, Walls};
 use crate::harness::plot::{draw, Chart, Series};
 
@@ -45,7 +47,10 @@ struct SceneFile {
     law: String,
     #[serde(default)]
     locking: Option<String>,
-    mesh_level: Levels,
+    #[serde(default)]
+    mesh_level: Option<Levels>,
+    #[serde(default)]
+    mesh_intervals: Option<Vec<usize>>,
     walls: String,
     delta_over_r: Steps,
 }
@@ -73,17 +78,35 @@ impl Scene {
             "die" => Walls::Die,
             o => return Err(format!("{name}: walls must be plates or die, got '{o}'")),
         };
-        let levels = match f.mesh_level {
-            Levels::One(l) => vec![l],
-            Levels::Many(v) => v,
+        let meshes: Vec<usize> = match (f.mesh_level, f.mesh_intervals) {
+            (Some(lv), None) => {
+                let levels = match lv {
+                    Levels::One(l) => vec![l],
+                    Levels::Many(v) => v,
+                };
+                if !(levels.len() == 1
+                    || (levels.len() == 3 && levels[1] == levels[0] + 1 && levels[2] == levels[1] + 1))
+                {
+                    return Err(format!(
+                        "{name}: mesh_level must be one level or three consecutive levels, got {levels:?}"
+                    ));
+                }
+                if let Some(l) = levels.iter().find(|&&l| l == 0 || l > 6) {
+                    return Err(format!("{name}: mesh_level must be 1 to 6, got {l}"));
+                }
+                levels.iter().map(|&l| intervals(l)).collect()
+            }
+            (None, Some(n)) => {
+                // Richardson needs one refinement ratio: n₂ n₂ = n₁ n₃ exactly, in integers.
+                if !(n.len() == 1 || (n.len() == 3 && n[0] < n[1] && n[1] * n[1] == n[0] * n[2])) {
+                    return Err(format!(
+                        "{name}: mesh_intervals must be one value or three increasing values with a constant ratio (n2*n2 = n1*n3), got {n:?}"
+                    ));
+                }
+                n
+            }
+            _ => return Err(format!("{name}: give exactly one of mesh_level and mesh_intervals")),
         };
-        if !(levels.len() == 1
-            || (levels.len() == 3 && levels[1] == levels[0] + 1 && levels[2] == levels[1] + 1))
-        {
-            return Err(format!(
-                "{name}: mesh_level must be one level or three consecutive levels, got {levels:?}"
-            ));
-        }
         let delta_over_r = match f.delta_over_r {
             Steps::List(v) => v,
             Steps::Range { to, step } => {
@@ -96,15 +119,15 @@ impl Scene {
                 (1..=n).map(|i| (i as f64 * step).min(to)).collect()
             }
         };
-        let runs = levels
+        let runs = meshes
             .iter()
-            .map(|&level| SphereRun {
+            .map(|&intervals| SphereRun {
                 radius: f.radius,
                 youngs_modulus: f.youngs_modulus,
                 poisson_ratio: f.poisson_ratio,
                 law,
                 vol,
-                level,
+                intervals,
                 walls,
                 delta_over_r: delta_over_r.clone(),
             })
@@ -126,8 +149,8 @@ pub fn run(path: &Path, out: &Path) -> Result<(), String> {
         let t = Instant::now();
         let pts = r.run(|p| {
             eprintln!(
-                "level {} delta/r {:.3}: plate {:.5e} Pa, side {:.5e} Pa ({} + {} contact nodes, {:.0} s)",
-                r.level,
+                "{} intervals delta/r {:.3}: plate {:.5e} Pa, side {:.5e} Pa ({} + {} contact nodes, {:.0} s)",
+                r.intervals,
                 p.delta_over_r,
                 p.plate_stress,
                 p.side_stress,
@@ -151,7 +174,7 @@ pub fn run(path: &Path, out: &Path) -> Result<(), String> {
 fn table(scene: &Scene, curves: &[Vec<Point>]) -> String {
     let r0 = &scene.runs[0];
     let mut s = format!(
-        "# mcdem continuum: {:?} sphere r = {} m, E = {} Pa, nu = {}, {:?}, walls {:?}, mesh levels {:?}\n\
+        "# mcdem continuum: {:?} sphere r = {} m, E = {} Pa, nu = {}, {:?}, walls {:?}, intervals per block edge {:?}\n\
          # stresses = wall force / (2r)^2 [Pa]; side = one side wall; *_err = Richardson error bar (|extrapolated - finest|)\n",
         r0.law,
         r0.radius,
@@ -159,19 +182,20 @@ fn table(scene: &Scene, curves: &[Vec<Point>]) -> String {
         r0.poisson_ratio,
         r0.vol,
         r0.walls,
-        scene.runs.iter().map(|r| r.level).collect::<Vec<_>>()
+        scene.runs.iter().map(|r| r.intervals).collect::<Vec<_>>()
     );
     s.push_str("delta_over_r,plate_stress_pa,plate_stress_err_pa,side_stress_pa,side_stress_err_pa,plate_order,side_order");
     for r in &scene.runs {
-        let _ = write!(s, ",plate_l{0},side_l{0}", r.level);
+        let _ = write!(s, ",plate_n{0},side_n{0}", r.intervals);
     }
     s.push('\n');
     for (i, p) in curves[0].iter().enumerate() {
         let v: Vec<&Point> = curves.iter().map(|c| &c[i]).collect();
         let (pl, sd) = if v.len() == 3 {
+            let q = scene.runs[1].intervals as f64 / scene.runs[0].intervals as f64;
             (
-                richardson(v[0].plate_stress, v[1].plate_stress, v[2].plate_stress),
-                richardson(v[0].side_stress, v[1].side_stress, v[2].side_stress),
+                richardson(v[0].plate_stress, v[1].plate_stress, v[2].plate_stress, q),
+                richardson(v[0].side_stress, v[1].side_stress, v[2].side_stress, q),
             )
         } else {
             let one = |x: f64| super::Richardson { value: x, error: f64::NAN, order: f64::NAN };
@@ -194,14 +218,14 @@ fn plot(scene: &Scene, curves: &[Vec<Point>], path: &Path) -> Result<(), String>
     let mut series = Vec::new();
     for (r, c) in scene.runs.iter().zip(curves) {
         series.push(Series {
-            label: format!("plate, level {}", r.level),
+            label: format!("plate, {} intervals", r.intervals),
             points: c.iter().map(|p| (p.delta_over_r, p.plate_stress)).collect(),
             markers: false,
             thin: false,
         });
         if r.walls == Walls::Die {
             series.push(Series {
-                label: format!("side, level {}", r.level),
+                label: format!("side, {} intervals", r.intervals),
                 points: c.iter().map(|p| (p.delta_over_r, p.side_stress)).collect(),
                 markers: false,
                 thin: true,
