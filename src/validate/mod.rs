@@ -18,6 +18,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::harness::plot;
+
 use serde::Serialize;
 
 /// One value of the long-form CSV.
