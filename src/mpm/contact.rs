@@ -6,8 +6,9 @@
 //! lattice), so a node of the common grid is the same point in every proper grid that holds it.
 //! A node carrying mass of two bodies A and B is a potential contact node. There
 //!
-//! - the normal n points from A to B: the mass gradient ∇m of a body points into it, so
-//!   n = (∇m_B − ∇m_A)/|∇m_B − ∇m_A|;
+//! - the normal n points from A to B. With ∇m_I = Σ_p m_p ∇N_I(x_p) (the derivative of the nodal
+//!   mass with respect to the node's position) a body's ∇m points out of it at its boundary
+//!   nodes (moving a node away from the points lowers N_I there), so n = (∇m_A − ∇m_B)/|∇m_A − ∇m_B|;
 //! - the force on B is r and on A −r (momentum is exchanged, never created);
 //! - the step's relative displacement g = u_B − u_A (= Δt × the relative velocity at t + Δt, Eq. 10)
 //!   obeys the velocity-Signorini condition g·n ≥ 0, r·n ≥ 0, (g·n)(r·n) = 0 (Fig. 2a) and Coulomb's
@@ -110,7 +111,7 @@ struct ContactNode<const D: usize> {
 #[derive(Clone, Debug, Default)]
 pub struct ContactWorkspace<const D: usize> {
     pub bodies: Vec<Workspace<D>>,
-    /// Per body, per grid node: ∇m = Σ_p m_p ∇N_I(x_p).
+    /// Per body, per grid node: ∇m = Σ_p m_p ∇N_I(x_p), pointing out of the body.
     mass_grad: Vec<Vec<Vector<D>>>,
     /// Per body, per dof: the wall friction force.
     wall_ft: Vec<Vec<f64>>,
@@ -190,10 +191,15 @@ pub fn step_bodies<const D: usize>(
                 }
                 let ib = gb.node_index(local);
                 let nb_idx = cws.bodies[b].dof_of[ib];
-                if nb_idx == usize::MAX {
+                // Both bodies must carry mass there (a massless active node has no inertia to
+                // exchange momentum with).
+                if nb_idx == usize::MAX
+                    || cws.bodies[b].node_mass[ib] <= 0.0
+                    || cws.bodies[a].node_mass[ia] <= 0.0
+                {
                     continue;
                 }
-                let n = cws.mass_grad[b][ib] - cws.mass_grad[a][ia];
+                let n = cws.mass_grad[a][ia] - cws.mass_grad[b][ib];
                 // Equal and opposite gradients cannot happen between two bodies on opposite
                 // sides; a zero sum (a node deep inside both, i.e. overlap) has no normal.
                 if n.norm() == 0.0 {
@@ -249,6 +255,9 @@ pub fn step_bodies<const D: usize>(
             let ft = &mut cws.wall_ft[b];
             for a in 0..ws.active.len() {
                 let m = ws.node_mass[ws.active[a]];
+                if m <= 0.0 {
+                    continue;
+                }
                 let mut bound = None;
                 let mut count = 0;
                 for ax in 0..D {

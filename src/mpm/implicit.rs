@@ -138,6 +138,11 @@ pub struct Workspace<const D: usize> {
     pub(super) fbar: FBarState<D>,
     /// Body force Σ_p N_p m_p g of the step (Eq. 4); `fext` is this plus the contact forces.
     pub(super) fbody: Vec<f64>,
+    /// References of Eq. 16 over the step's Newton iterations (max ‖Δu‖, |Δu¹·R¹|), carried over
+    /// warm re-solves: a re-solve starts at the solution of nearly the same problem, and its own
+    /// first increment, at the noise floor, is no reference for "converged".
+    pub(super) du_ref: f64,
+    pub(super) energy_ref: Option<f64>,
 }
 
 /// Advances the body by one implicit step of size `opt.dt` (Eqs. 10–16). `step` numbers the step in
@@ -201,11 +206,19 @@ pub(super) fn prepare<const D: usize>(
             ws.node_mom[st.nodes[c]] += pts.v[p] * w;
         }
     }
+    // Active nodes: every node of a cell holding a point. A point exactly on a cell face (a body
+    // translated by whole sub-cells does land there) has N = 0 but ∇N ≠ 0 at the far nodes, so a
+    // node may be active with zero mass; its row of K is then the stiffness alone.
     ws.dof_of.clear();
     ws.dof_of.resize(nn, usize::MAX);
+    for st in &ws.stencils {
+        for c in 0..Stencil::<D>::LEN {
+            ws.dof_of[st.nodes[c]] = 0;
+        }
+    }
     ws.active.clear();
     for i in 0..nn {
-        if ws.node_mass[i] > 0.0 {
+        if ws.dof_of[i] != usize::MAX {
             ws.dof_of[i] = ws.active.len();
             ws.active.push(i);
         }
@@ -224,7 +237,8 @@ pub(super) fn prepare<const D: usize>(
     resize(&mut ws.mass_dof);
     for (a, &i) in ws.active.iter().enumerate() {
         for d in 0..D {
-            ws.v_old[a * D + d] = ws.node_mom[i][d] / ws.node_mass[i];
+            let m = ws.node_mass[i];
+            ws.v_old[a * D + d] = if m > 0.0 { ws.node_mom[i][d] / m } else { 0.0 };
             ws.mass_dof[a * D + d] = ws.node_mass[i];
         }
     }
@@ -275,6 +289,8 @@ pub(super) fn prepare<const D: usize>(
 
     ws.fext.clear();
     ws.fext.extend_from_slice(&ws.fbody);
+    ws.du_ref = 0.0;
+    ws.energy_ref = None;
     Ok(())
 }
 
@@ -314,9 +330,10 @@ pub(super) fn solve<const D: usize>(
     }
 
     let mut report = StepReport { wall_load: vec![0.0; walls.len()], ..Default::default() };
-    let mut du_max: f64 = 0.0;
-    let mut energy1 = 0.0;
-    let mut first = true;
+    let (mut du_max, mut energy1, mut first) = match (warm, ws.energy_ref) {
+        (true, Some(e)) => (ws.du_ref, e, false),
+        _ => (0.0, 0.0, true),
+    };
     // A node within round-off of its wall bound is on it (displacements are O(h), their
     // round-off O(1e-16 h)).
     let tol = 1e-10 * grid.h;
@@ -455,6 +472,10 @@ pub(super) fn solve<const D: usize>(
             if let DofState::Wall(w) = ws.state[k] {
                 report.wall_load[w] += walls[w].side * -ws.res[k];
             }
+        }
+        if !first {
+            ws.du_ref = du_max;
+            ws.energy_ref = Some(energy1);
         }
         return Ok(report);
     }
