@@ -250,7 +250,7 @@ impl Scene {
                 return Err(format!("body {b}: no material point falls inside the body (refine the grid)"));
             }
             points.v.iter_mut().for_each(|v| *v = v0);
-            bodies.push(Body { grid, points, law: law.clone() });
+            bodies.push(Body { grid, points, law });
             shapes.push(inside);
         }
         // Bodies must not overlap at start: no point of one inside the shape of another.
@@ -259,7 +259,7 @@ impl Scene {
                 if a == b {
                     continue;
                 }
-                if let Some(p) = body.points.x.iter().position(|x| inside(x)) {
+                if let Some(p) = body.points.x.iter().position(inside) {
                     return Err(format!(
                         "bodies {a} and {b} overlap at start: material point {p} of body {a} at {:?} lies inside body {b}",
                         body.points.x[p].as_slice()
