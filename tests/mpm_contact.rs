@@ -70,3 +70,47 @@ fn bad_contact_scenes_name_their_problem() {
     assert!(e.contains("not both"), "{e}");
     assert!(Scene::from_json(&two_discs("")).unwrap().setup::<2>().is_ok());
 }
+
+/// The disc between plates (scene 1, h = 1 mm, Δt = 100 µs, 10 steps to d = 0.25 mm): the contact
+/// driver with μ = 0 gives the plate loads of the frictionless one-body step bit for bit (no
+/// friction force is ever set, one contact iteration per step).
+#[test]
+fn plates_with_zero_friction_reproduce_the_frictionless_step() {
+    use mcdem::mpm::implicit::{step, Workspace};
+    let scene = |mu: f64| {
+        format!(
+            r#"{{"dimension": 2, "material": {{"law": "hooke", "lambda": 100e6, "mu": 1.5e6, "density": 990}},
+                "body": {{"shape": "disc", "center": [0.0, 0.01], "radius": 0.01}},
+                "grid": {{"h": 1e-3, "points_per_cell": 2}},
+                "walls": [{{"axis": 1, "side": 1, "position": 0.0}}, {{"axis": 1, "side": -1, "position": 0.02, "velocity": -0.5}}],
+                "contact": {{"wall_friction": {mu}}}, "dt": 1e-4, "steps": 10}}"#
+        )
+    };
+    let run = |mu: f64, driver: bool| {
+        let mut s = Scene::from_json(&scene(mu)).unwrap().setup::<2>().unwrap();
+        let (mut ws, mut cws) = (Workspace::default(), ContactWorkspace::default());
+        let mut loads = Vec::new();
+        for k in 0..10 {
+            let l = if driver {
+                step_bodies(&mut s.bodies, &s.walls, &s.options, &s.contact, k, &mut cws).unwrap().wall_load
+            } else {
+                step(&mut s.bodies[0], &s.walls, &[], &s.options, k, &mut ws).unwrap().wall_load
+            };
+            loads.push(l[1]);
+            for w in s.walls.iter_mut() {
+                w.position += w.velocity * s.options.dt;
+            }
+        }
+        loads
+    };
+    let plain = run(0.0, false);
+    assert_eq!(run(0.0, true), plain);
+    assert!(plain[9] > 0.0, "the top plate must load the disc: {plain:?}");
+    // With μ = 0.5 at this quasi-static step (K ≫ M/Δt²) the contact iterations converge too
+    // slowly (measured: a force update still moves a node by 1.0e-6 m after 500 iterations against
+    // the 1e-10 m criterion): the run must stop with that message, not return a wrong answer.
+    let mut s = Scene::from_json(&scene(0.5)).unwrap().setup::<2>().unwrap();
+    let e = step_bodies(&mut s.bodies, &s.walls, &s.options, &s.contact, 0, &mut ContactWorkspace::default())
+        .unwrap_err();
+    assert!(e.contains("contact iterations did not converge") && e.contains("reduce Δt"), "{e}");
+}
