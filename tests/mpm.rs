@@ -430,8 +430,8 @@ fn bad_scenes_name_their_problem() {
     assert!(e.contains("locking") && e.contains("bbar"), "{e}");
     // A point outside the grid is reported with its step.
     let mut setup = Scene::from_json(&scene(good, "")).unwrap().setup::<2>().unwrap();
-    setup.body.points.x[0][0] = 1.0;
-    let e = step(&mut setup.body, &[], &[], &setup.options, 7, &mut Workspace::default()).unwrap_err();
+    setup.bodies[0].points.x[0][0] = 1.0;
+    let e = step(&mut setup.bodies[0], &[], &[], &setup.options, 7, &mut Workspace::default()).unwrap_err();
     assert!(e.contains("step 7") && e.contains("outside the grid"), "{e}");
     // Newton capped at one iteration cannot meet Eq. 16 on a loaded step: the criteria are named.
     let mut setup =
@@ -440,8 +440,8 @@ fn bad_scenes_name_their_problem() {
             .setup::<2>()
             .unwrap();
     setup.options.newton.max_iter = 1;
-    let e =
-        step(&mut setup.body, &setup.walls, &[], &setup.options, 3, &mut Workspace::default()).unwrap_err();
+    let e = step(&mut setup.bodies[0], &setup.walls, &[], &setup.options, 3, &mut Workspace::default())
+        .unwrap_err();
     assert!(e.contains("step 3") && e.contains("C1") && e.contains("Eq. 16"), "{e}");
 }
 

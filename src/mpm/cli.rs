@@ -1,12 +1,13 @@
-//! `mcdem mpm SCENE [--out DIR]`: runs a scene and writes `history.csv`, `points.csv` (final
-//! material points) and PNG charts into DIR.
+//! `mcdem mpm SCENE [--out DIR]`: runs a scene and writes `history.csv`, `bodies.csv` (centre and
+//! velocity of every body), `points.csv` (final material points) and PNG charts into DIR.
 
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
 use super::constitutive::{inverse, Constitutive, Law, Mat};
-use super::implicit::{step, Workspace};
+use super::contact::{step_bodies, ContactWorkspace};
+use super::grid::Vector;
 use super::points::Points;
 use super::scene::Scene;
 use crate::harness::plot::{draw, Chart, Series};
@@ -52,7 +53,7 @@ pub fn run(path: &Path, out: &Path) -> Result<(), String> {
 fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
     let mut setup = scene.setup::<D>()?;
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    let (lambda, mu) = setup.body.law.lame();
+    let (lambda, mu) = setup.bodies[0].law.lame();
     let a = D - 1;
     // Plate pair along the last axis (bottom side +1, top side −1), if the scene has one.
     let bottom = setup.walls.iter().position(|w| w.axis == a && w.side > 0.0);
@@ -62,30 +63,32 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
         _ => None,
     };
     let mut csv = String::from(
-        "step,time,d,F_top,F_bottom,F_mean,F_eq19,gamma_plates,gamma_mean,S_mean,newton_iterations\n",
+        "step,time,d,F_top,F_bottom,F_mean,F_eq19,gamma_plates,gamma_mean,S_mean,newton_iterations,contact_iterations,contact_nodes,active_contacts,contact_normal_force,momentum_x,momentum_y,kinetic_energy\n",
     );
+    let mut bcsv = String::from("step,time,body,x,y,vx,vy\n");
     let (mut fd, mut f19, mut sg) = (Vec::new(), Vec::new(), Vec::new());
-    let mut ws = Workspace::default();
+    let mut ws = ContactWorkspace::default();
     let started = Instant::now();
     let mut total_iters = 0;
     let mut failure = None;
     for k in 0..scene.steps {
-        let rep = match step(&mut setup.body, &setup.walls, &[], &setup.options, k, &mut ws) {
-            Ok(r) => r,
-            Err(e) => {
-                // Keep what was computed: the history up to the failed step is written first.
-                failure = Some(e);
-                break;
-            }
-        };
-        total_iters += rep.iterations;
+        let rep =
+            match step_bodies(&mut setup.bodies, &setup.walls, &setup.options, &setup.contact, k, &mut ws) {
+                Ok(r) => r,
+                Err(e) => {
+                    // Keep what was computed: the history up to the failed step is written first.
+                    failure = Some(e);
+                    break;
+                }
+            };
+        total_iters += rep.newton_iterations;
         for w in setup.walls.iter_mut() {
             w.position += w.velocity * setup.options.dt;
         }
         if (k + 1) % scene.output_every != 0 && k + 1 != scene.steps {
             continue;
         }
-        let (gm, sm) = mean_strain_stress(&setup.body.points, &setup.body.law);
+        let (gm, sm) = mean_strain_stress(&setup.bodies[0].points, &setup.bodies[0].law);
         let (mut d, mut ft, mut fb, mut gp) = (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
         if let (Some(b), Some(t), Some(g0)) = (bottom, top, gap0) {
             let gap = setup.walls[t].position - setup.walls[b].position;
@@ -97,12 +100,42 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
         }
         let f19_k = if D == 2 { eq19_force(lambda, mu, d) } else { f64::NAN };
         let t = (k + 1) as f64 * setup.options.dt;
+        let mut mom = [0.0; 3];
+        let mut kin = 0.0;
+        for (b, body) in setup.bodies.iter().enumerate() {
+            let p = body.points.momentum();
+            let m: f64 = body.points.mass.iter().sum();
+            let c = body
+                .points
+                .mass
+                .iter()
+                .zip(&body.points.x)
+                .fold(Vector::<D>::zeros(), |acc, (m, x)| acc + x * *m)
+                / m;
+            mom[..D].iter_mut().zip(p.iter()).for_each(|(a, b)| *a += b);
+            kin += body.points.kinetic_energy();
+            let _ = writeln!(
+                bcsv,
+                "{},{t:.9e},{b},{:.9e},{:.9e},{:.9e},{:.9e}",
+                k + 1,
+                c[0],
+                c[1],
+                p[0] / m,
+                p[1] / m
+            );
+        }
         let _ = writeln!(
             csv,
-            "{},{t:.9e},{d:.9e},{ft:.9e},{fb:.9e},{:.9e},{f19_k:.9e},{gp:.9e},{gm:.9e},{sm:.9e},{}",
+            "{},{t:.9e},{d:.9e},{ft:.9e},{fb:.9e},{:.9e},{f19_k:.9e},{gp:.9e},{gm:.9e},{sm:.9e},{},{},{},{},{:.9e},{:.9e},{:.9e},{kin:.9e}",
             k + 1,
             0.5 * (ft + fb),
-            rep.iterations
+            rep.newton_iterations,
+            rep.iterations,
+            rep.contact_nodes,
+            rep.active_contacts,
+            rep.contact_normal_force,
+            mom[0],
+            mom[1]
         );
         if d.is_finite() {
             fd.push((d, 0.5 * (ft + fb)));
@@ -112,22 +145,31 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
     }
     let wall = started.elapsed().as_secs_f64();
     std::fs::write(out.join("history.csv"), csv).map_err(|e| format!("cannot write history.csv: {e}"))?;
-    let mut pts = String::from("x,y,z,J,sigma_xx,sigma_yy,sigma_xy\n");
-    let b = &setup.body.points;
-    for p in 0..b.len() {
-        let x = b.x[p];
-        let z = if D == 3 { x[2] } else { 0.0 };
-        let s = b.sigma[p];
-        let _ = writeln!(
-            pts,
-            "{:.9e},{:.9e},{z:.9e},{:.9e},{:.9e},{:.9e},{:.9e}",
-            x[0],
-            x[1],
-            b.vol[p] / b.vol0[p],
-            s[(0, 0)],
-            s[(1, 1)],
-            s[(0, 1)]
-        );
+    std::fs::write(out.join("bodies.csv"), bcsv).map_err(|e| format!("cannot write bodies.csv: {e}"))?;
+    let mut pts = String::from("body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy\n");
+    let mut snap = Vec::new();
+    let mut n_points = 0;
+    for (body_idx, body) in setup.bodies.iter().enumerate() {
+        let b = &body.points;
+        n_points += b.len();
+        for x in &b.x {
+            snap.push((x[0], x[a]));
+        }
+        for p in 0..b.len() {
+            let x = b.x[p];
+            let z = if D == 3 { x[2] } else { 0.0 };
+            let s = b.sigma[p];
+            let _ = writeln!(
+                pts,
+                "{body_idx},{:.9e},{:.9e},{z:.9e},{:.9e},{:.9e},{:.9e},{:.9e}",
+                x[0],
+                x[1],
+                b.vol[p] / b.vol0[p],
+                s[(0, 0)],
+                s[(1, 1)],
+                s[(0, 1)]
+            );
+        }
     }
     std::fs::write(out.join("points.csv"), pts).map_err(|e| format!("cannot write points.csv: {e}"))?;
     if !fd.is_empty() {
@@ -150,10 +192,6 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
                 ],
             },
         )?;
-        let mut snap = Vec::new();
-        for x in &b.x {
-            snap.push((x[0], x[a]));
-        }
         draw(
             &out.join("stress_strain.png"),
             &Chart {
@@ -176,6 +214,18 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
                 series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
             },
         )?;
+    } else {
+        draw(
+            &out.join("points_final.png"),
+            &Chart {
+                title: "Material points at the end",
+                x_label: "x [m]",
+                y_label: "y [m]",
+                log_x: false,
+                log_y: false,
+                series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
+            },
+        )?;
     }
     if let Some(e) = failure {
         return Err(format!("{e} (history up to the previous step written to {})", out.display()));
@@ -183,7 +233,7 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
     eprintln!(
         "mpm: {} steps, {} points, {} Newton iterations, {wall:.2} s wall time; outputs in {}",
         scene.steps,
-        b.len(),
+        n_points,
         total_iters,
         out.display()
     );

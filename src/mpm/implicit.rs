@@ -22,6 +22,7 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat as FMat;
 
 use super::constitutive::{det, Constitutive, Law, Mat, Tangent};
+use super::fbar::{fbar_stiffness, FBarState};
 use super::grid::{Grid, Stencil, Vector};
 use super::points::Points;
 
@@ -104,7 +105,7 @@ pub struct Fixed {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum DofState {
+pub(super) enum DofState {
     Free,
     /// At the bound of wall w.
     Wall(usize),
@@ -114,109 +115,34 @@ enum DofState {
 /// Buffers of a step, kept between steps so that the loops do not allocate.
 #[derive(Clone, Debug, Default)]
 pub struct Workspace<const D: usize> {
-    stencils: Vec<Stencil<D>>,
-    node_mass: Vec<f64>,
-    node_mom: Vec<Vector<D>>,
+    pub(super) stencils: Vec<Stencil<D>>,
+    pub(super) node_mass: Vec<f64>,
+    pub(super) node_mom: Vec<Vector<D>>,
     /// Grid node → active node (mass > 0) or usize::MAX.
-    dof_of: Vec<usize>,
-    active: Vec<usize>,
-    v_old: Vec<f64>,
-    u: Vec<f64>,
-    du: Vec<f64>,
-    trial: Vec<f64>,
-    res: Vec<f64>,
-    fext: Vec<f64>,
-    mass_dof: Vec<f64>,
-    lo: Vec<(f64, usize)>,
-    hi: Vec<(f64, usize)>,
-    state: Vec<DofState>,
-    trip: Vec<Triplet<usize, usize, f64>>,
+    pub(super) dof_of: Vec<usize>,
+    pub(super) active: Vec<usize>,
+    pub(super) v_old: Vec<f64>,
+    pub(super) u: Vec<f64>,
+    pub(super) du: Vec<f64>,
+    pub(super) trial: Vec<f64>,
+    pub(super) res: Vec<f64>,
+    pub(super) fext: Vec<f64>,
+    pub(super) mass_dof: Vec<f64>,
+    pub(super) lo: Vec<(f64, usize)>,
+    pub(super) hi: Vec<(f64, usize)>,
+    pub(super) state: Vec<DofState>,
+    pub(super) trip: Vec<Triplet<usize, usize, f64>>,
     /// Stress conjugate to the point's own F (P, or P_eff under F-bar).
-    pk1: Vec<Mat<D>>,
-    tangent: Vec<Tangent<D>>,
-    fbar: FBarState<D>,
-}
-
-/// Per-point and per-cell quantities of F-bar at the trial displacement (see [`Locking::FBar`]).
-#[derive(Clone, Debug, Default)]
-struct FBarState<const D: usize> {
-    /// Points sorted by cell, and the start of each cell's run in `order` (plus the end).
-    order: Vec<usize>,
-    start: Vec<usize>,
-    /// Per cell: Σ V⁰, J̄, τ̄ = Σ V⁰τ / Σ V⁰.
-    vol0: Vec<f64>,
-    jbar: Vec<f64>,
-    taubar: Vec<f64>,
-    /// Per point: F, F⁻ᵀ, J, s = (J̄/J)^{1/D}, F̄ = sF, P̄ = P(F̄), τ = P̄ : F̄ / D.
-    f: Vec<Mat<D>>,
-    finv_t: Vec<Mat<D>>,
-    j: Vec<f64>,
-    s: Vec<f64>,
-    fb: Vec<Mat<D>>,
-    pb: Vec<Mat<D>>,
-    tau: Vec<f64>,
-}
-
-impl<const D: usize> FBarState<D> {
-    /// Groups the points by the cell that holds them (keyed by the cell's lowest corner node: with
-    /// multilinear shape functions all points of a cell share its 2^D nodes).
-    fn group(&mut self, stencils: &[Stencil<D>]) {
-        self.order.clear();
-        self.order.extend(0..stencils.len());
-        self.order.sort_by_key(|&p| stencils[p].nodes[0]);
-        self.start.clear();
-        for (k, &p) in self.order.iter().enumerate() {
-            if k == 0 || stencils[self.order[k - 1]].nodes[0] != stencils[p].nodes[0] {
-                self.start.push(k);
-            }
-        }
-        self.start.push(stencils.len());
-        let (np, nc) = (stencils.len(), self.start.len() - 1);
-        for v in [&mut self.vol0, &mut self.jbar, &mut self.taubar] {
-            v.clear();
-            v.resize(nc, 0.0);
-        }
-        for v in [&mut self.j, &mut self.s, &mut self.tau] {
-            v.clear();
-            v.resize(np, 0.0);
-        }
-        for v in [&mut self.f, &mut self.finv_t, &mut self.fb, &mut self.pb] {
-            v.clear();
-            v.resize(np, Mat::<D>::identity());
-        }
-    }
-
-    /// F, J of every point and J̄ of every cell at displacement u; the points' F̄. Returns the first
-    /// inverted point (J ≤ 0) as an error.
-    fn kinematics(
-        &mut self,
-        pts: &Points<D>,
-        stencils: &[Stencil<D>],
-        dof_of: &[usize],
-        u: &[f64],
-    ) -> Result<(), (usize, f64)> {
-        for c in 0..self.start.len() - 1 {
-            let (mut v, mut vj) = (0.0, 0.0);
-            for &p in &self.order[self.start[c]..self.start[c + 1]] {
-                let f = incremental_gradient(&stencils[p], dof_of, u) * pts.f[p];
-                let j = det(&f);
-                if j <= 0.0 {
-                    return Err((p, j));
-                }
-                self.f[p] = f;
-                self.j[p] = j;
-                v += pts.vol0[p];
-                vj += pts.vol0[p] * j;
-            }
-            self.vol0[c] = v;
-            self.jbar[c] = vj / v;
-            for &p in &self.order[self.start[c]..self.start[c + 1]] {
-                self.s[p] = (self.jbar[c] / self.j[p]).powf(1.0 / D as f64);
-                self.fb[p] = self.f[p] * self.s[p];
-            }
-        }
-        Ok(())
-    }
+    pub(super) pk1: Vec<Mat<D>>,
+    pub(super) tangent: Vec<Tangent<D>>,
+    pub(super) fbar: FBarState<D>,
+    /// Body force Σ_p N_p m_p g of the step (Eq. 4); `fext` is this plus the contact forces.
+    pub(super) fbody: Vec<f64>,
+    /// References of Eq. 16 over the step's Newton iterations (max ‖Δu‖, |Δu¹·R¹|), carried over
+    /// warm re-solves: a re-solve starts at the solution of nearly the same problem, and its own
+    /// first increment, at the noise floor, is no reference for "converged".
+    pub(super) du_ref: f64,
+    pub(super) energy_ref: Option<f64>,
 }
 
 /// Advances the body by one implicit step of size `opt.dt` (Eqs. 10–16). `step` numbers the step in
@@ -229,10 +155,25 @@ pub fn step<const D: usize>(
     step: usize,
     ws: &mut Workspace<D>,
 ) -> Result<StepReport, String> {
+    prepare(body, walls, fixed, opt, step, ws)?;
+    let report = solve(body, walls, opt, step, ws, false)?;
+    finish(body, opt, step, ws)?;
+    Ok(report)
+}
+
+/// First part of a step: shape functions, lumped mass, nodal velocity (Eq. 5), body force, wall
+/// bounds and Dirichlet conditions of every grid dof. The contact forces are zero after it.
+pub(super) fn prepare<const D: usize>(
+    body: &Body<D>,
+    walls: &[Wall],
+    fixed: &[Fixed],
+    opt: &StepOptions,
+    step: usize,
+    ws: &mut Workspace<D>,
+) -> Result<(), String> {
     let dt = opt.dt;
     let grid = &body.grid;
-    let pts = &mut body.points;
-    let np = pts.len();
+    let pts = &body.points;
     let gravity = Vector::<D>::from_fn(|d, _| opt.gravity[d]);
 
     // Shape functions of every point; a point outside the grid is an error of the scene or a body
@@ -265,11 +206,19 @@ pub fn step<const D: usize>(
             ws.node_mom[st.nodes[c]] += pts.v[p] * w;
         }
     }
+    // Active nodes: every node of a cell holding a point. A point exactly on a cell face (a body
+    // translated by whole sub-cells does land there) has N = 0 but ∇N ≠ 0 at the far nodes, so a
+    // node may be active with zero mass; its row of K is then the stiffness alone.
     ws.dof_of.clear();
     ws.dof_of.resize(nn, usize::MAX);
+    for st in &ws.stencils {
+        for c in 0..Stencil::<D>::LEN {
+            ws.dof_of[st.nodes[c]] = 0;
+        }
+    }
     ws.active.clear();
     for i in 0..nn {
-        if ws.node_mass[i] > 0.0 {
+        if ws.dof_of[i] != usize::MAX {
             ws.dof_of[i] = ws.active.len();
             ws.active.push(i);
         }
@@ -284,11 +233,12 @@ pub fn step<const D: usize>(
     resize(&mut ws.u);
     resize(&mut ws.du);
     resize(&mut ws.res);
-    resize(&mut ws.fext);
+    resize(&mut ws.fbody);
     resize(&mut ws.mass_dof);
     for (a, &i) in ws.active.iter().enumerate() {
         for d in 0..D {
-            ws.v_old[a * D + d] = ws.node_mom[i][d] / ws.node_mass[i];
+            let m = ws.node_mass[i];
+            ws.v_old[a * D + d] = if m > 0.0 { ws.node_mom[i][d] / m } else { 0.0 };
             ws.mass_dof[a * D + d] = ws.node_mass[i];
         }
     }
@@ -297,7 +247,7 @@ pub fn step<const D: usize>(
         for c in 0..Stencil::<D>::LEN {
             let a = ws.dof_of[st.nodes[c]];
             for d in 0..D {
-                ws.fext[a * D + d] += st.n[c] * pts.mass[p] * gravity[d];
+                ws.fbody[a * D + d] += st.n[c] * pts.mass[p] * gravity[d];
             }
         }
     }
@@ -337,21 +287,53 @@ pub fn step<const D: usize>(
         }
     }
 
+    ws.fext.clear();
+    ws.fext.extend_from_slice(&ws.fbody);
+    ws.du_ref = 0.0;
+    ws.energy_ref = None;
+    Ok(())
+}
+
+/// Solves the step's nonlinear equations (Eqs. 10–16) for the nodal displacement `ws.u` under the
+/// current `ws.fext` (body force plus contact forces), the points untouched. With `warm` the
+/// previous solution and wall active set are the starting point (the contact iterations re-solve
+/// after a small change of the contact forces); otherwise the predictor of the nodal velocities.
+pub(super) fn solve<const D: usize>(
+    body: &Body<D>,
+    walls: &[Wall],
+    opt: &StepOptions,
+    step: usize,
+    ws: &mut Workspace<D>,
+    warm: bool,
+) -> Result<StepReport, String> {
+    let dt = opt.dt;
+    let grid = &body.grid;
+    let pts = &body.points;
+    let np = pts.len();
+    let ndof = ws.u.len();
     // Predictor: the nodes keep their velocity, projected on the admissible set.
     for k in 0..ndof {
+        if warm {
+            if ws.state[k] == DofState::Free {
+                clamp(ws, k);
+            }
+            continue;
+        }
         ws.u[k] = dt * ws.v_old[k];
         match ws.state[k] {
             DofState::Fixed(v) => ws.u[k] = v,
             _ => {
+                ws.state[k] = DofState::Free;
                 clamp(ws, k);
             }
         }
     }
 
     let mut report = StepReport { wall_load: vec![0.0; walls.len()], ..Default::default() };
-    let mut du_max: f64 = 0.0;
-    let mut energy1 = 0.0;
-    let mut first = true;
+    let (mut du_max, mut energy1, mut first) = match (warm, ws.energy_ref) {
+        (true, Some(e)) => (ws.du_ref, e, false),
+        _ => (0.0, 0.0, true),
+    };
     // A node within round-off of its wall bound is on it (displacements are O(h), their
     // round-off O(1e-16 h)).
     let tol = 1e-10 * grid.h;
@@ -379,82 +361,89 @@ pub fn step<const D: usize>(
                 }
             }
         }
-        assemble_and_solve(pts, opt.locking, ws, dt, step)?;
-        // Globalisation: the backward-Euler step (Eqs. 10–12) is the minimiser of the incremental
-        // potential Π(u) = |u − Δt v|²_M /(2Δt²) + Σ_p V_p⁰ W(F_p(u)) − f_ext·u, whose gradient is
-        // −R. A full Newton increment of a large step can overshoot (or invert a point, where the
-        // laws are undefined): halve it until Π decreases (Armijo).
-        let mut slope: f64 =
-            (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.du[k] * ws.res[k]).sum();
-        // The F-bar energy is not convex in u even where W(F) is (J̄/J couples the points of a
-        // cell), so far from the solution K can be indefinite and the Newton increment point
-        // uphill (Δu·R < 0 while −R is the gradient of Π); its opposite then descends.
-        if opt.locking == Locking::FBar && slope < 0.0 {
-            for k in 0..ndof {
-                if ws.state[k] == DofState::Free {
-                    ws.du[k] = -ws.du[k];
+        // A residual already at round-off of the forces (a body in free flight, or a warm start
+        // at the solution) is converged: a Newton increment would be noise and the line search
+        // could find no decrease along it.
+        let fscale = force_scale(pts, ws, dt);
+        let r0: f64 =
+            (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.res[k] * ws.res[k]).sum();
+        let converged = if r0.sqrt() <= ROUNDOFF * fscale * (ndof as f64).sqrt() {
+            report.iterations = iter;
+            true
+        } else {
+            assemble_and_solve(pts, opt.locking, ws, dt, step)?;
+            // Globalisation: the backward-Euler step (Eqs. 10–12) is the minimiser of the incremental
+            // potential Π(u) = |u − Δt v|²_M /(2Δt²) + Σ_p V_p⁰ W(F_p(u)) − f_ext·u, whose gradient is
+            // −R. A full Newton increment of a large step can overshoot (or invert a point, where the
+            // laws are undefined): halve it until Π decreases (Armijo).
+            let mut slope: f64 =
+                (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.du[k] * ws.res[k]).sum();
+            // The F-bar energy is not convex in u even where W(F) is (J̄/J couples the points of a
+            // cell), so far from the solution K can be indefinite and the Newton increment point
+            // uphill (Δu·R < 0 while −R is the gradient of Π); its opposite then descends.
+            if opt.locking == Locking::FBar && slope < 0.0 {
+                for k in 0..ndof {
+                    if ws.state[k] == DofState::Free {
+                        ws.du[k] = -ws.du[k];
+                    }
                 }
+                slope = -slope;
             }
-            slope = -slope;
-        }
-        let (pi0, pi_scale) =
+            let (pi0, pi_scale) =
             potential(pts, &body.law, opt.locking, ws, dt, false).ok_or_else(|| {
             format!("step {step}, Newton iteration {iter}: a material point is inverted (J ≤ 0) after the wall projection; reduce Δt or refine the grid")
         })?;
-        let mut alpha = 1.0;
-        loop {
-            ws.trial.clear();
-            ws.trial.extend(ws.u.iter().zip(&ws.du).map(|(u, du)| u + alpha * du));
-            match potential(pts, &body.law, opt.locking, ws, dt, true) {
-                Some((pi, _)) if pi <= pi0 - 1e-4 * alpha * slope.abs() + 1e-12 * pi_scale => break,
-                _ => alpha *= 0.5,
-            }
-            if alpha < 1e-8 {
-                return Err(format!(
+            let mut alpha = 1.0;
+            loop {
+                ws.trial.clear();
+                ws.trial.extend(ws.u.iter().zip(&ws.du).map(|(u, du)| u + alpha * du));
+                match potential(pts, &body.law, opt.locking, ws, dt, true) {
+                    Some((pi, _)) if pi <= pi0 - 1e-4 * alpha * slope.abs() + 1e-12 * pi_scale => break,
+                    _ => alpha *= 0.5,
+                }
+                if alpha < 1e-8 {
+                    return Err(format!(
                     "step {step}, Newton iteration {iter}: line search failed (no decrease of the incremental potential along the Newton increment); reduce Δt"
                 ));
+                }
             }
-        }
-        ws.du.iter_mut().for_each(|d| *d *= alpha);
-        // Eq. 16 on the free dofs.
-        let mut norm = 0.0;
-        let mut energy = 0.0;
-        let mut rnorm = 0.0;
-        let mut fscale: f64 = 0.0;
-        for k in 0..ndof {
-            if ws.state[k] == DofState::Free {
-                norm += ws.du[k] * ws.du[k];
-                energy += ws.du[k] * ws.res[k];
-                rnorm += ws.res[k] * ws.res[k];
+            ws.du.iter_mut().for_each(|d| *d *= alpha);
+            // Eq. 16 on the free dofs.
+            let mut norm = 0.0;
+            let mut energy = 0.0;
+            for k in 0..ndof {
+                if ws.state[k] == DofState::Free {
+                    norm += ws.du[k] * ws.du[k];
+                    energy += ws.du[k] * ws.res[k];
+                }
             }
-            fscale = fscale.max(ws.mass_dof[k] * (ws.u[k] / (dt * dt)).abs()).max(ws.fext[k].abs());
-        }
-        fscale = fscale.max(internal_force_scale(pts, ws));
-        let norm = norm.sqrt();
-        du_max = du_max.max(norm);
-        if first {
-            energy1 = energy.abs();
-            first = false;
-        }
-        let c1 = if du_max > 0.0 { norm / du_max } else { 0.0 };
-        let c2 = if energy1 > 0.0 { energy.abs() / energy1 } else { 0.0 };
-        report.c1 = c1;
-        report.c2 = c2;
-        report.iterations = iter;
-        for k in 0..ndof {
-            ws.u[k] += ws.du[k];
-        }
-        // A residual at round-off of the forces makes both ratios meaningless (their references
-        // can vanish, e.g. a body at rest): that is convergence too.
-        let at_roundoff = rnorm.sqrt() <= 1e-13 * fscale * (ndof as f64).sqrt();
-        if std::env::var_os("MCDEM_MPM_TRACE").is_some() {
-            let nb = ws.state.iter().filter(|s| **s != DofState::Free).count();
-            eprintln!(
+            let norm = norm.sqrt();
+            du_max = du_max.max(norm);
+            if first {
+                energy1 = energy.abs();
+                first = false;
+            }
+            let c1 = if du_max > 0.0 { norm / du_max } else { 0.0 };
+            let c2 = if energy1 > 0.0 { energy.abs() / energy1 } else { 0.0 };
+            report.c1 = c1;
+            report.c2 = c2;
+            report.iterations = iter;
+            for k in 0..ndof {
+                ws.u[k] += ws.du[k];
+            }
+            // A residual at round-off of the forces makes both ratios meaningless (their references
+            // can vanish, e.g. a body at rest): that is convergence too.
+            let at_roundoff = r0.sqrt() <= ROUNDOFF * fscale * (ndof as f64).sqrt();
+            if std::env::var_os("MCDEM_MPM_TRACE").is_some() {
+                let nb = ws.state.iter().filter(|s| **s != DofState::Free).count();
+                eprintln!(
                 "  step {step} newton {iter}: C1 {c1:.3e} C2 {c2:.3e} |R| {:.3e} scale {fscale:.3e} alpha {alpha} bound {nb}",
-                rnorm.sqrt()
+                r0.sqrt()
             );
-        }
-        if !((c1 < opt.newton.eps1 && c2 < opt.newton.eps2) || at_roundoff) {
+            }
+            (c1 < opt.newton.eps1 && c2 < opt.newton.eps2) || at_roundoff
+        };
+        if !converged {
             continue;
         }
         // Converged for this active set: check the Signorini conditions.
@@ -484,13 +473,40 @@ pub fn step<const D: usize>(
                 report.wall_load[w] += walls[w].side * -ws.res[k];
             }
         }
-        update_points(pts, &body.law, opt.locking, ws, dt, opt.flip, step)?;
+        if !first {
+            ws.du_ref = du_max;
+            ws.energy_ref = Some(energy1);
+        }
         return Ok(report);
     }
     Err(format!(
         "step {step}: Newton did not converge in {} iterations: C1 = {:.3e} (ε1 = {:.1e}), C2 = {:.3e} (ε2 = {:.1e}) (Eq. 16)",
         opt.newton.max_iter, report.c1, opt.newton.eps1, report.c2, opt.newton.eps2
     ))
+}
+
+/// Last part of a step: moves the points with the converged grid motion of `solve`.
+pub(super) fn finish<const D: usize>(
+    body: &mut Body<D>,
+    opt: &StepOptions,
+    step: usize,
+    ws: &Workspace<D>,
+) -> Result<(), String> {
+    update_points(&mut body.points, &body.law, opt.locking, ws, opt.dt, opt.flip, step)
+}
+
+/// Relative size of the round-off of a sum of forces of magnitude `force_scale` (a few hundred
+/// ulps: the residual adds O(10) terms per dof, each with its own round-off).
+const ROUNDOFF: f64 = 1e-13;
+
+/// The largest force term of the residual (inertia, external, internal): the scale of its
+/// round-off.
+fn force_scale<const D: usize>(pts: &Points<D>, ws: &Workspace<D>, dt: f64) -> f64 {
+    let mut fscale: f64 = 0.0;
+    for k in 0..ws.u.len() {
+        fscale = fscale.max(ws.mass_dof[k] * (ws.u[k] / (dt * dt)).abs()).max(ws.fext[k].abs());
+    }
+    fscale.max(internal_force_scale(pts, ws))
 }
 
 /// The incremental potential Π of the step (see `step`) at `ws.u` (or `ws.trial` when `trial`),
@@ -565,7 +581,7 @@ fn clamp<const D: usize>(ws: &mut Workspace<D>, k: usize) -> bool {
 }
 
 /// ΔF_p = I + Σ_I u_I ⊗ ∇N_I(x_p).
-fn incremental_gradient<const D: usize>(st: &Stencil<D>, dof_of: &[usize], u: &[f64]) -> Mat<D> {
+pub(super) fn incremental_gradient<const D: usize>(st: &Stencil<D>, dof_of: &[usize], u: &[f64]) -> Mat<D> {
     let mut df = Mat::<D>::identity();
     for c in 0..Stencil::<D>::LEN {
         let a = dof_of[st.nodes[c]];
@@ -772,90 +788,6 @@ fn update_points<const D: usize>(
         pts.sigma[p] = pk1 * fs.transpose() / det(&fs);
     }
     Ok(())
-}
-
-/// Adds the F-bar stiffness (the exact Hessian of Σ_p V⁰_p W(F̄_p), de Souza Neto et al. 1996,
-/// Section 4, written here as the directional derivative of P_eff) to `ws.trip`, one cell at a time:
-/// all points of a cell share its 2^D nodes, so each column is one nodal direction δu = e_k at one
-/// corner, δF_p = e_k ⊗ G_p (G_p = F_p(t)ᵀ ∇N), and with a = F⁻ᵀ : δF = δJ/J, ā = δJ̄/J̄:
-/// δF̄ = s δF + F̄ (ā − a)/D, δP̄ = A(F̄) : δF̄, δτ = (δP̄ : F̄ + P̄ : δF̄)/D, δτ̄ = V⁰-mean of δτ,
-/// δP_eff = δs P̄ + s δP̄ − F⁻ᵀ δFᵀ F⁻ᵀ c + F⁻ᵀ (δτ̄ J/J̄ + τ̄ (J/J̄)(a − ā) − δτ),
-/// with δs = s (ā − a)/D and c = τ̄ J/J̄ − τ. Rows of bound dofs are skipped (identity rows).
-fn fbar_stiffness<const D: usize>(pts: &Points<D>, ws: &mut Workspace<D>) {
-    let n = Stencil::<D>::LEN;
-    let dd = D as f64;
-    let fb = &ws.fbar;
-    let mut dfb: Vec<Mat<D>> = Vec::new();
-    let mut dpb: Vec<Mat<D>> = Vec::new();
-    let mut a_p: Vec<f64> = Vec::new();
-    let mut dtau: Vec<f64> = Vec::new();
-    for c in 0..fb.start.len() - 1 {
-        let cell = &fb.order[fb.start[c]..fb.start[c + 1]];
-        let (jbar, taubar, v0) = (fb.jbar[c], fb.taubar[c], fb.vol0[c]);
-        let nodes = ws.stencils[cell[0]].nodes;
-        dfb.resize(cell.len(), Mat::<D>::zeros());
-        dpb.resize(cell.len(), Mat::<D>::zeros());
-        a_p.resize(cell.len(), 0.0);
-        dtau.resize(cell.len(), 0.0);
-        for cb in 0..n {
-            let rb = ws.dof_of[nodes[cb]];
-            for k in 0..D {
-                // δF_p = e_k ⊗ G_p: row k of δF is G_p.
-                let df = |p: usize| {
-                    let g = pts.f[p].transpose() * ws.stencils[p].grad[cb];
-                    let mut m = Mat::<D>::zeros();
-                    for l in 0..D {
-                        m[(k, l)] = g[l];
-                    }
-                    m
-                };
-                let mut abar = 0.0;
-                for (q, &p) in cell.iter().enumerate() {
-                    a_p[q] = fb.finv_t[p].dot(&df(p));
-                    abar += pts.vol0[p] * fb.j[p] * a_p[q];
-                }
-                abar /= v0 * jbar;
-                let mut dtaubar = 0.0;
-                for (q, &p) in cell.iter().enumerate() {
-                    let dfp = df(p);
-                    dfb[q] = dfp * fb.s[p] + fb.fb[p] * ((abar - a_p[q]) / dd);
-                    let a4 = &ws.tangent[p];
-                    dpb[q] = Mat::<D>::from_fn(|i, jj| {
-                        let mut v = 0.0;
-                        for kk in 0..D {
-                            for ll in 0..D {
-                                v += a4[i][jj][kk][ll] * dfb[q][(kk, ll)];
-                            }
-                        }
-                        v
-                    });
-                    dtau[q] = (dpb[q].dot(&fb.fb[p]) + fb.pb[p].dot(&dfb[q])) / dd;
-                    dtaubar += pts.vol0[p] * dtau[q];
-                }
-                dtaubar /= v0;
-                for (q, &p) in cell.iter().enumerate() {
-                    let dfp = df(p);
-                    let (s, j, fit) = (fb.s[p], fb.j[p], fb.finv_t[p]);
-                    let ds = s * (abar - a_p[q]) / dd;
-                    let cc = taubar * j / jbar - fb.tau[p];
-                    let dpe = fb.pb[p] * ds + dpb[q] * s - fit * dfp.transpose() * fit * cc
-                        + fit * (dtaubar * j / jbar + taubar * (j / jbar) * (a_p[q] - abar) - dtau[q]);
-                    let st = &ws.stencils[p];
-                    let ft = pts.f[p].transpose();
-                    for ca in 0..n {
-                        let ra = ws.dof_of[nodes[ca]];
-                        let f = dpe * (ft * st.grad[ca]) * pts.vol0[p];
-                        for i in 0..D {
-                            let row = ra * D + i;
-                            if ws.state[row] == DofState::Free {
-                                ws.trip.push(Triplet::new(row, rb * D + k, f[i]));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
 }
 
 #[cfg(test)]

@@ -13,6 +13,8 @@
 
 pub mod cli;
 pub mod constitutive;
+pub mod contact;
+mod fbar;
 pub mod grid;
 pub mod implicit;
 pub mod points;

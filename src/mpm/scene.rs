@@ -1,9 +1,11 @@
-//! JSON scenes of `mcdem mpm`: one body (disc/sphere or block), its law, the grid resolution, the
-//! walls and the time stepping. Every value is validated with a message naming the problem.
+//! JSON scenes of `mcdem mpm`: one body (`"body"`) or several (`"bodies"`), discs/spheres or
+//! blocks of one material, the grid resolution, the walls, the friction coefficients of Contact
+//! Dynamics and the time stepping. Every value is validated with a message naming the problem.
 
 use serde::Deserialize;
 
 use super::constitutive::{Hooke, Law, NeoHookean, SaintVenantKirchhoff};
+use super::contact::ContactOptions;
 use super::grid::{Grid, Vector};
 use super::implicit::{Body, Locking, Newton, StepOptions, Wall};
 use super::points::Points;
@@ -14,7 +16,11 @@ pub struct Scene {
     /// 2 (plane strain) or 3.
     pub dimension: usize,
     pub material: MaterialSpec,
-    pub body: BodySpec,
+    /// One body, or several in `bodies` (exactly one of the two).
+    #[serde(default)]
+    pub body: Option<BodySpec>,
+    #[serde(default)]
+    pub bodies: Option<Vec<BodySpec>>,
     pub grid: GridSpec,
     #[serde(default)]
     pub walls: Vec<WallSpec>,
@@ -37,6 +43,25 @@ pub struct Scene {
     /// disc-between-plates scenes (docs/mpm.md).
     #[serde(default)]
     pub locking: Option<String>,
+    /// Contact Dynamics between bodies and with the walls (friction, stop rule).
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Coulomb coefficient body–wall (default 0).
+    #[serde(default)]
+    pub wall_friction: f64,
+    /// Coulomb coefficient body–body (default 0).
+    #[serde(default)]
+    pub body_friction: f64,
+    /// Stop rule of the contact iterations, in cells of relative nodal displacement per step.
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    #[serde(default)]
+    pub max_iter: Option<usize>,
 }
 
 fn one() -> usize {
@@ -66,10 +91,15 @@ pub enum BodySpec {
     Disc {
         center: Vec<f64>,
         radius: f64,
+        /// Initial velocity of all its points [m/s] (default at rest).
+        #[serde(default)]
+        velocity: Vec<f64>,
     },
     Block {
         lo: Vec<f64>,
         hi: Vec<f64>,
+        #[serde(default)]
+        velocity: Vec<f64>,
     },
 }
 
@@ -113,9 +143,10 @@ type Inside<const D: usize> = Box<dyn Fn(&Vector<D>) -> bool>;
 
 /// Everything a run needs, built from a validated scene.
 pub struct Setup<const D: usize> {
-    pub body: Body<D>,
+    pub bodies: Vec<Body<D>>,
     pub walls: Vec<Wall>,
     pub options: StepOptions,
+    pub contact: ContactOptions,
 }
 
 impl Scene {
@@ -159,38 +190,82 @@ impl Scene {
         if !(0.0..=1.0).contains(&self.flip) {
             return Err(format!("flip must lie in [0, 1], got {}", self.flip));
         }
-        let vec = |v: &[f64], what: &str| -> Result<Vector<D>, String> {
-            if v.len() != D || v.iter().any(|x| !x.is_finite()) {
-                return Err(format!("body: {what} needs {D} finite coordinates, got {v:?}"));
-            }
-            Ok(Vector::<D>::from_fn(|d, _| v[d]))
+        let specs: Vec<&BodySpec> = match (&self.body, &self.bodies) {
+            (Some(b), None) => vec![b],
+            (None, Some(v)) if !v.is_empty() => v.iter().collect(),
+            (None, Some(_)) => return Err("bodies: the list is empty".into()),
+            (None, None) => return Err("scene: give \"body\" or \"bodies\"".into()),
+            (Some(_), Some(_)) => return Err("scene: give either \"body\" or \"bodies\", not both".into()),
         };
-        let (lo, hi, inside): (Vector<D>, Vector<D>, Inside<D>) = match &self.body {
-            BodySpec::Disc { center, radius } => {
-                let c = vec(center, "center")?;
-                if !(radius.is_finite() && *radius > 0.0) {
-                    return Err(format!("body: radius must be positive, got {radius}"));
+        let mut bodies = Vec::new();
+        let mut shapes: Vec<Inside<D>> = Vec::new();
+        // The first body's grid origin anchors the common lattice of all proper grids (Section 2.2).
+        let mut anchor: Option<Vector<D>> = None;
+        for (b, spec) in specs.iter().enumerate() {
+            let vec = |v: &[f64], what: &str| -> Result<Vector<D>, String> {
+                if v.len() != D || v.iter().any(|x| !x.is_finite()) {
+                    return Err(format!("body {b}: {what} needs {D} finite coordinates, got {v:?}"));
                 }
-                let r = *radius;
-                (c.add_scalar(-r), c.add_scalar(r), Box::new(move |x: &Vector<D>| (x - c).norm() < r))
-            }
-            BodySpec::Block { lo, hi } => {
-                let (l, h) = (vec(lo, "lo")?, vec(hi, "hi")?);
-                if (0..D).any(|d| h[d] <= l[d]) {
-                    return Err(format!("body: block hi {hi:?} must exceed lo {lo:?} on every axis"));
+                Ok(Vector::<D>::from_fn(|d, _| v[d]))
+            };
+            let (lo, hi, inside, velocity): (Vector<D>, Vector<D>, Inside<D>, &Vec<f64>) = match spec {
+                BodySpec::Disc { center, radius, velocity } => {
+                    let c = vec(center, "center")?;
+                    if !(radius.is_finite() && *radius > 0.0) {
+                        return Err(format!("body {b}: radius must be positive, got {radius}"));
+                    }
+                    let r = *radius;
+                    (
+                        c.add_scalar(-r),
+                        c.add_scalar(r),
+                        Box::new(move |x: &Vector<D>| (x - c).norm() < r),
+                        velocity,
+                    )
                 }
-                (l, h, Box::new(move |x: &Vector<D>| (0..D).all(|d| x[d] > l[d] && x[d] < h[d])))
+                BodySpec::Block { lo, hi, velocity } => {
+                    let (l, h) = (vec(lo, "lo")?, vec(hi, "hi")?);
+                    if (0..D).any(|d| h[d] <= l[d]) {
+                        return Err(format!("body {b}: block hi {hi:?} must exceed lo {lo:?} on every axis"));
+                    }
+                    (
+                        l,
+                        h,
+                        Box::new(move |x: &Vector<D>| (0..D).all(|d| x[d] > l[d] && x[d] < h[d])),
+                        velocity,
+                    )
+                }
+            };
+            let v0 = if velocity.is_empty() { Vector::<D>::zeros() } else { vec(velocity, "velocity")? };
+            // The grid starts at the body's lower corner minus the margin (on the common lattice),
+            // so that a body resting on a wall through its bounding box has that wall on a grid line.
+            let m = g.margin as f64 * g.h;
+            let a0 = *anchor.get_or_insert(lo.add_scalar(-m));
+            let origin = Vector::<D>::from_fn(|d, _| a0[d] + ((lo[d] - m - a0[d]) / g.h).floor() * g.h);
+            let cells: [usize; D] =
+                std::array::from_fn(|d| ((hi[d] + m - origin[d]) / g.h - 1e-9).ceil() as usize);
+            let grid = Grid::new(origin, g.h, cells)?;
+            let mut points =
+                Points::seed(lo, hi, origin, g.h, g.points_per_cell, self.material.density, &inside);
+            if points.is_empty() {
+                return Err(format!("body {b}: no material point falls inside the body (refine the grid)"));
             }
-        };
-        // The grid starts at the body's lower corner minus the margin, so that a body resting on a
-        // wall through its bounding box has that wall on a grid line.
-        let origin = lo.add_scalar(-(g.margin as f64) * g.h);
-        let cells: [usize; D] =
-            std::array::from_fn(|d| ((hi[d] - lo[d]) / g.h - 1e-9).ceil() as usize + 2 * g.margin);
-        let grid = Grid::new(origin, g.h, cells)?;
-        let points = Points::seed(lo, hi, origin, g.h, g.points_per_cell, self.material.density, inside);
-        if points.is_empty() {
-            return Err("body: no material point falls inside the body (refine the grid)".into());
+            points.v.iter_mut().for_each(|v| *v = v0);
+            bodies.push(Body { grid, points, law });
+            shapes.push(inside);
+        }
+        // Bodies must not overlap at start: no point of one inside the shape of another.
+        for (a, body) in bodies.iter().enumerate() {
+            for (b, inside) in shapes.iter().enumerate() {
+                if a == b {
+                    continue;
+                }
+                if let Some(p) = body.points.x.iter().position(inside) {
+                    return Err(format!(
+                        "bodies {a} and {b} overlap at start: material point {p} of body {a} at {:?} lies inside body {b}",
+                        body.points.x[p].as_slice()
+                    ));
+                }
+            }
         }
         let mut walls = Vec::new();
         for (w, ws) in self.walls.iter().enumerate() {
@@ -203,11 +278,14 @@ impl Scene {
             if !ws.position.is_finite() || !ws.velocity.is_finite() {
                 return Err(format!("wall {w}: position and velocity must be finite"));
             }
-            if let Some(p) = points.x.iter().position(|x| ws.side * (x[ws.axis] - ws.position) < 0.0) {
-                return Err(format!(
-                    "wall {w}: material point {p} at {:?} starts on the wrong side of the wall (overlap at start)",
-                    points.x[p].as_slice()
-                ));
+            for (b, body) in bodies.iter().enumerate() {
+                let points = &body.points;
+                if let Some(p) = points.x.iter().position(|x| ws.side * (x[ws.axis] - ws.position) < 0.0) {
+                    return Err(format!(
+                        "wall {w}: material point {p} of body {b} at {:?} starts on the wrong side of the wall (overlap at start)",
+                        points.x[p].as_slice()
+                    ));
+                }
             }
             walls.push(Wall { axis: ws.axis, side: ws.side, position: ws.position, velocity: ws.velocity });
         }
@@ -232,10 +310,19 @@ impl Scene {
             Some("fbar") => Locking::FBar,
             Some(other) => return Err(format!("locking: unknown value \"{other}\" (fbar, none)")),
         };
+        let mut contact = ContactOptions::default();
+        if let Some(c) = &self.contact {
+            contact.wall_friction = c.wall_friction;
+            contact.body_friction = c.body_friction;
+            contact.tolerance = c.tolerance.unwrap_or(contact.tolerance);
+            contact.max_iter = c.max_iter.unwrap_or(contact.max_iter);
+        }
+        contact.validate()?;
         Ok(Setup {
-            body: Body { grid, points, law },
+            bodies,
             walls,
             options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip, locking },
+            contact,
         })
     }
 }

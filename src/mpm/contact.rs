@@ -1,0 +1,426 @@
+//! Contact Dynamics between MPM bodies and with rigid walls, with Coulomb friction (Nezamabadi et
+//! al. 2019, Section 2.2, Figs. 1–2, Eqs. 6–7).
+//!
+//! Multi-mesh scheme: every body keeps its proper grid (its own nodal masses, velocities and
+//! implicit solve); the proper grids are windows of one common lattice (same h, origins on the
+//! lattice), so a node of the common grid is the same point in every proper grid that holds it.
+//! A node carrying mass of two bodies A and B is a potential contact node. There
+//!
+//! - the normal n points from A to B. With ∇m_I = Σ_p m_p ∇N_I(x_p) (the derivative of the nodal
+//!   mass with respect to the node's position) a body's ∇m points out of it at its boundary
+//!   nodes (moving a node away from the points lowers N_I there), so n = (∇m_A − ∇m_B)/|∇m_A − ∇m_B|;
+//! - the force on B is r and on A −r (momentum is exchanged, never created);
+//! - the step's relative displacement g = u_B − u_A (= Δt × the relative velocity at t + Δt, Eq. 10)
+//!   obeys the velocity-Signorini condition g·n ≥ 0, r·n ≥ 0, (g·n)(r·n) = 0 (Fig. 2a) and Coulomb's
+//!   law |r_t| ≤ μ r·n, with r_t = −|r_t| g_t/|g_t| when g_t ≠ 0 (Fig. 2b).
+//!
+//! A rigid wall is a partner of infinite mass. Its normal condition is the exact active set inside
+//! each body's Newton solve (`implicit`); its friction acts on the tangential dofs of the nodes
+//! bound to it, with the wall's nodal reaction as the normal force.
+//!
+//! The forces enter each body's momentum balance (Eq. 4) as external nodal forces and the body is
+//! re-solved implicitly. Between solves, every contact node's force is updated by Eqs. 6–7: the
+//! linear relation r = r⁰ − (m_red/Δt²) g (the nodal masses alone answer a change of force within
+//! the step, m_red = m_A m_B/(m_A + m_B), or the body's nodal mass against a wall) intersected with
+//! the Signorini and Coulomb graphs, i.e. r_n = max(0, r⁰_n − (m_red/Δt²) g_n) and r_t the
+//! projection of r⁰_t − (m_red/Δt²) g_t onto the disc |r_t| ≤ μ r_n. Each update moves the
+//! node's free displacements by the local response (nonlinear Gauss–Seidel over the contacts); the
+//! re-solve then spreads it through the bodies. The iteration stops when no contact force changes
+//! a nodal relative displacement by more than `tolerance` × h over the step. It converges because
+//! the true compliance of a node, (M/Δt² + K)⁻¹, is below the local one Δt²/m: the rate is set by
+//! K against M/Δt², fast when c Δt ≲ h (c the wave speed), slow for quasi-static steps.
+
+use super::grid::{Grid, Vector};
+use super::implicit::{finish, prepare, solve, Body, DofState, StepOptions, Wall, Workspace};
+
+/// Friction coefficients and the stop rule of the contact iterations.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactOptions {
+    /// Coulomb coefficient between a body and a wall (≥ 0).
+    pub wall_friction: f64,
+    /// Coulomb coefficient between two bodies (≥ 0).
+    pub body_friction: f64,
+    /// Converged when the largest change of a nodal relative displacement over the step caused by
+    /// a force update is below `tolerance` × h.
+    pub tolerance: f64,
+    pub max_iter: usize,
+}
+
+impl Default for ContactOptions {
+    fn default() -> Self {
+        // 1e-7 of a cell per step is far below the contact's own discretisation error (one cell,
+        // Section 2.2) and reached in a few tens of iterations when c Δt ≲ h.
+        Self { wall_friction: 0.0, body_friction: 0.0, tolerance: 1e-7, max_iter: 500 }
+    }
+}
+
+impl ContactOptions {
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, mu) in [("wall_friction", self.wall_friction), ("body_friction", self.body_friction)] {
+            if !(mu.is_finite() && mu >= 0.0) {
+                return Err(format!("contact: {name} must be a finite friction coefficient ≥ 0, got {mu}"));
+            }
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) || self.max_iter == 0 {
+            return Err(format!(
+                "contact: tolerance must be positive and max_iter at least 1 (got {}, {})",
+                self.tolerance, self.max_iter
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What one multi-body step reports.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ContactReport {
+    /// Contact iterations (each one re-solves every body).
+    pub iterations: usize,
+    /// Newton iterations summed over bodies and contact iterations.
+    pub newton_iterations: usize,
+    /// Normal force of each wall on all bodies, positive when it pushes (N, or N/m in 2-D).
+    pub wall_load: Vec<f64>,
+    /// Friction force of each wall on all bodies, per axis (the wall's own axis is 0).
+    pub wall_friction: Vec<[f64; 3]>,
+    /// Nodes carrying mass of two bodies, and how many of them push (r·n > 0).
+    pub contact_nodes: usize,
+    pub active_contacts: usize,
+    /// Σ r·n over the body–body contact nodes (N, or N/m in 2-D).
+    pub contact_normal_force: f64,
+    /// The last iteration's largest change of a nodal relative displacement [m].
+    pub correction: f64,
+}
+
+/// A node of the common grid carrying mass of bodies `a` and `b` (a < b).
+#[derive(Clone, Copy, Debug)]
+struct ContactNode<const D: usize> {
+    a: usize,
+    b: usize,
+    /// The node's active index in each body's workspace.
+    na: usize,
+    nb: usize,
+    /// Unit normal from A to B.
+    n: Vector<D>,
+    m_a: f64,
+    m_b: f64,
+    /// Force on B (−r on A).
+    r: Vector<D>,
+}
+
+/// Buffers of the multi-body step, kept between steps.
+#[derive(Clone, Debug, Default)]
+pub struct ContactWorkspace<const D: usize> {
+    pub bodies: Vec<Workspace<D>>,
+    /// Per body, per grid node: ∇m = Σ_p m_p ∇N_I(x_p), pointing out of the body.
+    mass_grad: Vec<Vec<Vector<D>>>,
+    /// Per body, per dof: the wall friction force.
+    wall_ft: Vec<Vec<f64>>,
+    nodes: Vec<ContactNode<D>>,
+}
+
+/// Offset of a proper grid in the common lattice of the first body's grid.
+fn lattice_offset<const D: usize>(g: &Grid<D>, g0: &Grid<D>) -> Result<[i64; D], String> {
+    let mut off = [0i64; D];
+    for d in 0..D {
+        let x = (g.origin[d] - g0.origin[d]) / g0.h;
+        off[d] = x.round() as i64;
+        if (x - x.round()).abs() > 1e-6 || (g.h - g0.h).abs() > 1e-12 * g0.h {
+            return Err(format!(
+                "contact: the bodies' grids are not windows of one lattice (cell sizes {} and {}, origin offset {x} cells along axis {d})",
+                g0.h, g.h
+            ));
+        }
+    }
+    Ok(off)
+}
+
+/// Advances all bodies by one implicit step with Contact Dynamics between them and with the walls
+/// (module doc). Walls are given at time t; the caller moves them afterwards.
+pub fn step_bodies<const D: usize>(
+    bodies: &mut [Body<D>],
+    walls: &[Wall],
+    opt: &StepOptions,
+    copt: &ContactOptions,
+    step: usize,
+    cws: &mut ContactWorkspace<D>,
+) -> Result<ContactReport, String> {
+    let nb = bodies.len();
+    let dt = opt.dt;
+    let h = bodies.first().ok_or("contact: no body")?.grid.h;
+    cws.bodies.resize_with(nb, Workspace::default);
+    cws.mass_grad.resize_with(nb, Vec::new);
+    cws.wall_ft.resize_with(nb, Vec::new);
+    for (b, body) in bodies.iter().enumerate() {
+        let ws = &mut cws.bodies[b];
+        prepare(body, walls, &[], opt, step, ws)?;
+        let mg = &mut cws.mass_grad[b];
+        mg.clear();
+        mg.resize(body.grid.n_nodes(), Vector::<D>::zeros());
+        for (p, st) in ws.stencils.iter().enumerate() {
+            for c in 0..super::grid::Stencil::<D>::LEN {
+                mg[st.nodes[c]] += st.grad[c] * body.points.mass[p];
+            }
+        }
+        let ft = &mut cws.wall_ft[b];
+        ft.clear();
+        ft.resize(ws.u.len(), 0.0);
+    }
+
+    // Potential contact nodes: common-lattice nodes with mass of two bodies.
+    cws.nodes.clear();
+    for a in 0..nb {
+        let off_a = lattice_offset(&bodies[a].grid, &bodies[0].grid)?;
+        for b in a + 1..nb {
+            let off_b = lattice_offset(&bodies[b].grid, &bodies[0].grid)?;
+            let (ga, gb) = (&bodies[a].grid, &bodies[b].grid);
+            let npa_b = gb.nodes_per_axis();
+            for (na, &ia) in cws.bodies[a].active.iter().enumerate() {
+                let ijk = ga.node_ijk(ia);
+                let mut local = [0usize; D];
+                let mut inside = true;
+                for d in 0..D {
+                    let g = ijk[d] as i64 + off_a[d] - off_b[d];
+                    if g < 0 || g >= npa_b[d] as i64 {
+                        inside = false;
+                        break;
+                    }
+                    local[d] = g as usize;
+                }
+                if !inside {
+                    continue;
+                }
+                let ib = gb.node_index(local);
+                let nb_idx = cws.bodies[b].dof_of[ib];
+                // Both bodies must carry mass there (a massless active node has no inertia to
+                // exchange momentum with).
+                if nb_idx == usize::MAX
+                    || cws.bodies[b].node_mass[ib] <= 0.0
+                    || cws.bodies[a].node_mass[ia] <= 0.0
+                {
+                    continue;
+                }
+                let n = cws.mass_grad[a][ia] - cws.mass_grad[b][ib];
+                // Equal and opposite gradients cannot happen between two bodies on opposite
+                // sides; a zero sum (a node deep inside both, i.e. overlap) has no normal.
+                if n.norm() == 0.0 {
+                    return Err(format!(
+                        "step {step}: bodies {a} and {b} overlap at grid node {ia} of body {a} (no contact normal)"
+                    ));
+                }
+                cws.nodes.push(ContactNode {
+                    a,
+                    b,
+                    na,
+                    nb: nb_idx,
+                    n: n.normalize(),
+                    m_a: cws.bodies[a].node_mass[ia],
+                    m_b: cws.bodies[b].node_mass[ib],
+                    r: Vector::<D>::zeros(),
+                });
+            }
+        }
+    }
+
+    let mut report = ContactReport {
+        wall_load: vec![0.0; walls.len()],
+        wall_friction: vec![[0.0; 3]; walls.len()],
+        contact_nodes: cws.nodes.len(),
+        ..Default::default()
+    };
+    let limit = copt.tolerance * h;
+    let mut converged = false;
+    for it in 1..=copt.max_iter {
+        report.iterations = it;
+        // Contact forces into Eq. 4 as external nodal forces, then each body's implicit solve.
+        for b in 0..nb {
+            let ws = &mut cws.bodies[b];
+            for k in 0..ws.fext.len() {
+                ws.fext[k] = ws.fbody[k] + cws.wall_ft[b][k];
+            }
+        }
+        for c in &cws.nodes {
+            for d in 0..D {
+                cws.bodies[c.a].fext[c.na * D + d] -= c.r[d];
+                cws.bodies[c.b].fext[c.nb * D + d] += c.r[d];
+            }
+        }
+        for (b, body) in bodies.iter().enumerate() {
+            let rep = solve(body, walls, opt, step, &mut cws.bodies[b], it > 1)?;
+            report.newton_iterations += rep.iterations;
+        }
+        let mut corr: f64 = 0.0;
+        // Wall friction on the tangential dofs of the nodes bound to exactly one wall.
+        for b in 0..nb {
+            let ws = &mut cws.bodies[b];
+            let ft = &mut cws.wall_ft[b];
+            for a in 0..ws.active.len() {
+                let m = ws.node_mass[ws.active[a]];
+                if m <= 0.0 {
+                    continue;
+                }
+                let mut bound = None;
+                let mut count = 0;
+                for ax in 0..D {
+                    if let DofState::Wall(w) = ws.state[a * D + ax] {
+                        bound = Some((ax, w));
+                        count += 1;
+                    }
+                }
+                let mut trial = Vector::<D>::zeros();
+                let mut radius = 0.0;
+                if let (1, Some((ax, w))) = (count, bound) {
+                    // Reaction of the wall on the node, −R at its bound dof (≥ 0 after the solve).
+                    let fnorm = (walls[w].side * -ws.res[a * D + ax]).max(0.0);
+                    radius = copt.wall_friction * fnorm;
+                    for d in 0..D {
+                        if d != ax && ws.state[a * D + d] == DofState::Free {
+                            // The wall moves along its normal only: u_t is the slip over the step.
+                            trial[d] = ft[a * D + d] - m / (dt * dt) * ws.u[a * D + d];
+                        }
+                    }
+                }
+                let new = project_disc(trial, radius);
+                for d in 0..D {
+                    let k = a * D + d;
+                    let delta = new[d] - ft[k];
+                    if delta != 0.0 {
+                        corr = corr.max(delta.abs() * dt * dt / m);
+                        ft[k] = new[d];
+                        if ws.state[k] == DofState::Free {
+                            ws.u[k] += delta * dt * dt / m;
+                        }
+                    }
+                }
+            }
+        }
+        // Body–body contact nodes, one after the other (Gauss–Seidel).
+        for c in cws.nodes.iter_mut() {
+            let (wa, wb) = two_mut(&mut cws.bodies, c.a, c.b);
+            let ua = Vector::<D>::from_fn(|d, _| wa.u[c.na * D + d]);
+            let ub = Vector::<D>::from_fn(|d, _| wb.u[c.nb * D + d]);
+            let m_red = c.m_a * c.m_b / (c.m_a + c.m_b);
+            let new = signorini_coulomb(c.r, ub - ua, c.n, m_red / (dt * dt), copt.body_friction);
+            let delta = new - c.r;
+            if delta.norm() == 0.0 {
+                continue;
+            }
+            corr = corr.max(delta.norm() * dt * dt / m_red);
+            c.r = new;
+            for d in 0..D {
+                let (ka, kb) = (c.na * D + d, c.nb * D + d);
+                if wa.state[ka] == DofState::Free {
+                    wa.u[ka] -= delta[d] * dt * dt / c.m_a;
+                }
+                if wb.state[kb] == DofState::Free {
+                    wb.u[kb] += delta[d] * dt * dt / c.m_b;
+                }
+            }
+        }
+        report.correction = corr;
+        if corr <= limit {
+            converged = true;
+            break;
+        }
+    }
+    if !converged {
+        return Err(format!(
+            "step {step}: contact iterations did not converge in {} iterations: a force update still moves a node by {:.3e} m (criterion {:.1e} × h = {limit:.3e} m); reduce Δt",
+            copt.max_iter, report.correction, copt.tolerance
+        ));
+    }
+    // The last solve is within the tolerance of the final forces: report its loads, move points.
+    for b in 0..nb {
+        let ws = &cws.bodies[b];
+        for a in 0..ws.active.len() {
+            for ax in 0..D {
+                if let DofState::Wall(w) = ws.state[a * D + ax] {
+                    report.wall_load[w] += walls[w].side * -ws.res[a * D + ax];
+                    for d in 0..D {
+                        if d != ax {
+                            report.wall_friction[w][d] += cws.wall_ft[b][a * D + d];
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for c in &cws.nodes {
+        let rn = c.r.dot(&c.n);
+        if rn > 0.0 {
+            report.active_contacts += 1;
+            report.contact_normal_force += rn;
+        }
+    }
+    for (b, body) in bodies.iter_mut().enumerate() {
+        finish(body, opt, step, &cws.bodies[b])?;
+    }
+    Ok(report)
+}
+
+/// Eqs. 6–7 intersected with the Signorini and Coulomb graphs (Nezamabadi et al. 2019, Section
+/// 2.2, Fig. 2) at one node: from the force r⁰ on B and the step's relative displacement g = u_B − u_A
+/// obtained with it, the linear relation r = r⁰ − k g with k = m_red/Δt² gives the force that
+/// would stop the relative motion; its normal part is kept if it pushes (else the node opens,
+/// r = 0), its tangential part is projected onto the Coulomb disc |r_t| ≤ μ r_n. At a fixed point
+/// r_n > 0 ⇒ g_n = 0 and r_n = 0 ⇒ g_n ≥ 0 (Signorini); |r_t| < μ r_n ⇒ g_t = 0 (stick), else g_t
+/// is opposite to r_t (sliding resisted).
+pub fn signorini_coulomb<const D: usize>(
+    r0: Vector<D>,
+    g: Vector<D>,
+    n: Vector<D>,
+    k: f64,
+    mu: f64,
+) -> Vector<D> {
+    let trial = r0 - g * k;
+    let rn = trial.dot(&n);
+    if rn <= 0.0 {
+        return Vector::<D>::zeros();
+    }
+    let rt = trial - n * rn;
+    n * rn + project_disc(rt, mu * rn)
+}
+
+/// The vector v scaled back onto the ball of the given radius when it lies outside.
+fn project_disc<const D: usize>(v: Vector<D>, radius: f64) -> Vector<D> {
+    let l = v.norm();
+    if l > radius {
+        if radius > 0.0 {
+            v * (radius / l)
+        } else {
+            Vector::<D>::zeros()
+        }
+    } else {
+        v
+    }
+}
+
+/// Two distinct elements of a slice, mutably (i < j).
+fn two_mut<T>(v: &mut [T], i: usize, j: usize) -> (&mut T, &mut T) {
+    let (lo, hi) = v.split_at_mut(j);
+    (&mut lo[i], &mut hi[0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fixed points of the node update are the Signorini–Coulomb solutions.
+    #[test]
+    fn node_update_satisfies_signorini_and_coulomb() {
+        let n = Vector::<2>::new(0.6, 0.8);
+        let t = Vector::<2>::new(-0.8, 0.6);
+        let k = 2.0;
+        // Approaching and sliding fast: pushes, friction at the cone's edge, opposite to the slip.
+        let r = signorini_coulomb(Vector::<2>::zeros(), -n * 1.0 + t * 3.0, n, k, 0.5);
+        assert!((r.dot(&n) - 2.0).abs() < 1e-14);
+        assert!((r.dot(&t) + 1.0).abs() < 1e-14);
+        // Approaching, slow slip: sticks (the whole slip is cancelled).
+        let r = signorini_coulomb(Vector::<2>::zeros(), -n * 1.0 + t * 0.1, n, k, 0.5);
+        assert!((r.dot(&t) + 0.2).abs() < 1e-14);
+        // Separating: no force.
+        assert_eq!(signorini_coulomb(n * 0.3, n * 1.0, n, k, 0.5), Vector::<2>::zeros());
+        // μ = 0: no tangential force at all.
+        let r = signorini_coulomb(Vector::<2>::zeros(), -n + t, n, k, 0.0);
+        assert!(r.dot(&t).abs() < 1e-15);
+    }
+}
