@@ -20,8 +20,6 @@ use std::path::{Path, PathBuf};
 use crate::harness::plot;
 use std::time::Instant;
 
-use crate::harness::plot;
-
 use serde::Serialize;
 
 /// One value of the long-form CSV.
