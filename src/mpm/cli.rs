@@ -203,30 +203,18 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
                 series: vec![Series { label: "MPM".into(), points: sg, markers: true, thin: false }],
             },
         )?;
-        draw(
-            &out.join("points_final.png"),
-            &Chart {
-                title: "Material points at the end",
-                x_label: "x [m]",
-                y_label: "y [m]",
-                log_x: false,
-                log_y: false,
-                series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
-            },
-        )?;
-    } else {
-        draw(
-            &out.join("points_final.png"),
-            &Chart {
-                title: "Material points at the end",
-                x_label: "x [m]",
-                y_label: "y [m]",
-                log_x: false,
-                log_y: false,
-                series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
-            },
-        )?;
     }
+    draw(
+        &out.join("points_final.png"),
+        &Chart {
+            title: "Material points at the end",
+            x_label: "x [m]",
+            y_label: "y [m]",
+            log_x: false,
+            log_y: false,
+            series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
+        },
+    )?;
     if let Some(e) = failure {
         return Err(format!("{e} (history up to the previous step written to {})", out.display()));
     }

@@ -171,8 +171,8 @@ pub struct RunResult {
     pub wall_s: f64,
     pub particle_steps_per_s: f64,
     /// Set when the run at the study's Δt stopped at the contact law's range limit and this result
-    /// comes from the rerun at Δt/2 that finished: the shear strain of that stop (0: in the
-    /// compression). Such a stop was numerical.
+    /// comes from the rerun at Δt/2 or Δt/4 that finished (see [`classify`]): the shear strain of
+    /// that stop (0: in the compression). Such a stop depended on the step.
     #[serde(default)]
     pub stopped_at_full_step: Option<f64>,
 }
@@ -231,14 +231,13 @@ pub(super) fn random_positions(n: usize, l: f64, d: f64, rng: &mut Rng) -> Resul
     Ok(out)
 }
 
-/// A World at φ (after the affine compression), not yet sheared, with the step divided by `refine` and the compression given `refine` times as many
-/// steps, so that it runs at the same rate in time.
+/// A World at φ (after the affine compression), not yet sheared, sorted, at the step Δt/`refine`.
 fn prepare_refined(spec: &RunSpec, compress_steps: u64, refine: u32) -> Result<(World, f64), Stop> {
-    prepare_with(spec, compress_steps * u64::from(refine), true, refine)
-        .map_err(|message| Stop { strain: None, message })
+    prepare_with(spec, compress_steps, true, refine).map_err(|message| Stop { strain: None, message })
 }
 
-/// A World at φ (after the affine compression), not yet sheared, with or without spatial sorting (the cost measurement times both).
+/// A World at φ (after the affine compression), not yet sheared, with or without spatial sorting
+/// (the cost measurement times both).
 pub(super) fn prepare_sorted(
     spec: &RunSpec,
     compress_steps: u64,
@@ -247,12 +246,15 @@ pub(super) fn prepare_sorted(
     prepare_with(spec, compress_steps, sort, 1)
 }
 
+/// The step is Δt/`refine` and the compression takes `refine` times `compress_steps` steps, so that
+/// it runs at the same rate in time at every step size.
 fn prepare_with(
     spec: &RunSpec,
     compress_steps: u64,
     sort: bool,
     refine: u32,
 ) -> Result<(World, f64), String> {
+    let compress_steps = compress_steps * u64::from(refine);
     let d = DIAMETER;
     let vs = spec.n as f64 * std::f64::consts::PI / 6.0 * d.powi(3);
     let l = (vs / spec.phi).cbrt();
