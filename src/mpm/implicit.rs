@@ -143,6 +143,8 @@ pub struct Workspace<const D: usize> {
     /// first increment, at the noise floor, is no reference for "converged".
     pub(super) du_ref: f64,
     pub(super) energy_ref: Option<f64>,
+    /// LU factorization of the last assembled Newton matrix (the contact solver's compliance).
+    pub(super) lu: Option<Lu<usize, f64>>,
 }
 
 /// Advances the body by one implicit step of size `opt.dt` (Eqs. 10–16). `step` numbers the step in
@@ -175,6 +177,8 @@ pub(super) fn prepare<const D: usize>(
     let grid = &body.grid;
     let pts = &body.points;
     let gravity = Vector::<D>::from_fn(|d, _| opt.gravity[d]);
+    // The active dofs are renumbered below: a factorization of the last step no longer applies.
+    ws.lu = None;
 
     // Shape functions of every point; a point outside the grid is an error of the scene or a body
     // that travelled out of its grid.
@@ -364,7 +368,7 @@ pub(super) fn solve<const D: usize>(
         // A residual already at round-off of the forces (a body in free flight, or a warm start
         // at the solution) is converged: a Newton increment would be noise and the line search
         // could find no decrease along it.
-        let fscale = force_scale(pts, ws, dt);
+        let fscale = force_scale(pts, &body.law, ws, dt);
         let r0: f64 =
             (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.res[k] * ws.res[k]).sum();
         let converged = if r0.sqrt() <= ROUNDOFF * fscale * (ndof as f64).sqrt() {
@@ -398,7 +402,7 @@ pub(super) fn solve<const D: usize>(
                 ws.trial.clear();
                 ws.trial.extend(ws.u.iter().zip(&ws.du).map(|(u, du)| u + alpha * du));
                 match potential(pts, &body.law, opt.locking, ws, dt, true) {
-                    Some((pi, _)) if pi <= pi0 - 1e-4 * alpha * slope.abs() + 1e-12 * pi_scale => break,
+                    Some((pi, _)) if pi <= pi0 - 1e-4 * alpha * slope.abs() + PI_ROUNDOFF * pi_scale => break,
                     _ => alpha *= 0.5,
                 }
                 if alpha < 1e-8 {
@@ -495,23 +499,35 @@ pub(super) fn finish<const D: usize>(
     update_points(&mut body.points, &body.law, opt.locking, ws, opt.dt, opt.flip, step)
 }
 
+/// Relative round-off of the incremental potential against the magnitude `potential` reports (a
+/// few ulps: each point's energy is a short sum of O(1) invariants times the moduli).
+const PI_ROUNDOFF: f64 = 4.0 * f64::EPSILON;
+
 /// Relative size of the round-off of a sum of forces of magnitude `force_scale` (a few hundred
 /// ulps: the residual adds O(10) terms per dof, each with its own round-off).
 const ROUNDOFF: f64 = 1e-13;
 
 /// The largest force term of the residual (inertia, external, internal): the scale of its
 /// round-off.
-fn force_scale<const D: usize>(pts: &Points<D>, ws: &Workspace<D>, dt: f64) -> f64 {
+fn force_scale<const D: usize>(pts: &Points<D>, law: &Law, ws: &Workspace<D>, dt: f64) -> f64 {
     let mut fscale: f64 = 0.0;
     for k in 0..ws.u.len() {
         fscale = fscale.max(ws.mass_dof[k] * (ws.u[k] / (dt * dt)).abs()).max(ws.fext[k].abs());
     }
-    fscale.max(internal_force_scale(pts, ws))
+    fscale.max(internal_force_scale(pts, law, ws))
 }
 
 /// The incremental potential Π of the step (see `step`) at `ws.u` (or `ws.trial` when `trial`),
-/// with the sum of the magnitudes of its terms (the scale of its round-off); `None` when a point
-/// inverts there.
+/// with the magnitude of what is summed to compute it (the scale of its round-off); `None` when a
+/// point inverts there.
+///
+/// The magnitude counts the terms before they cancel, not the result: the kinetic term
+/// |u − Δt v|² is computed from u and Δt v, and W(F) from invariants of order one times the moduli
+/// (tr C − D, ln J, …), so a point carries round-off of ε V₀ (λ + 2μ) D however small its strain
+/// energy. Near the solution of a step the Newton increment's predicted decrease of Π falls below
+/// that noise, and a line search that ignores it halves α for ever (measured: a discs' collision
+/// where the increment was 3.5e-12 m, its predicted decrease 2e-16 J/m and the noise of Π 2e-15
+/// J/m, so Newton stalled with |R| at 1e-6 of the force scale).
 fn potential<const D: usize>(
     pts: &Points<D>,
     law: &Law,
@@ -526,15 +542,16 @@ fn potential<const D: usize>(
     for k in 0..u.len() {
         let kin = 0.5 * ws.mass_dof[k] * (u[k] - dt * ws.v_old[k]).powi(2) / (dt * dt);
         pi += kin - ws.fext[k] * u[k];
-        scale += kin + (ws.fext[k] * u[k]).abs();
+        scale += 0.5 * ws.mass_dof[k] * (u[k].powi(2) + (dt * ws.v_old[k]).powi(2)) / (dt * dt)
+            + (ws.fext[k] * u[k]).abs();
     }
+    let (lambda, mu) = law.lame();
+    scale += pts.vol0.iter().sum::<f64>() * (lambda.abs() + 2.0 * mu.abs()) * D as f64;
     match locking {
         Locking::None => {
             for (p, st) in ws.stencils.iter().enumerate() {
                 let f = incremental_gradient(st, &ws.dof_of, u) * pts.f[p];
-                let w = pts.vol0[p] * law.energy(&f).ok()?;
-                pi += w;
-                scale += w.abs();
+                pi += pts.vol0[p] * law.energy(&f).ok()?;
             }
         }
         Locking::FBar => {
@@ -555,9 +572,7 @@ fn potential<const D: usize>(
                 for &p in cell {
                     let f = grad(p);
                     let fbar = f * (jbar / det(&f)).powf(1.0 / D as f64);
-                    let w = pts.vol0[p] * law.energy(&fbar).ok()?;
-                    pi += w;
-                    scale += w.abs();
+                    pi += pts.vol0[p] * law.energy(&fbar).ok()?;
                 }
             }
         }
@@ -662,12 +677,21 @@ fn evaluate<const D: usize>(
 }
 
 /// Largest nodal contribution of the internal force, the scale of the residual's round-off.
-fn internal_force_scale<const D: usize>(pts: &Points<D>, ws: &Workspace<D>) -> f64 {
+///
+/// The stress enters with the magnitude of its terms before they cancel: P(F) is computed from
+/// terms of order (λ + 2μ)|F| (μF, μF⁻ᵀ, λ ln J F⁻ᵀ) whose sum is small under small strain, so
+/// its round-off is ε (λ + 2μ) however small the stress (measured: a block resting under gravity,
+/// stresses of 20 Pa against moduli of 1 MPa, whose residual stalled at 5e-10 of the gravity
+/// load, i.e. at ε (λ + 2μ) V₀ |∇N|).
+fn internal_force_scale<const D: usize>(pts: &Points<D>, law: &Law, ws: &Workspace<D>) -> f64 {
+    let (lambda, mu) = law.lame();
+    let modulus = lambda.abs() + 2.0 * mu.abs();
     let mut s: f64 = 0.0;
     for (p, st) in ws.stencils.iter().enumerate() {
+        let stress = ws.pk1[p].norm().max(modulus * pts.f[p].norm());
         for c in 0..Stencil::<D>::LEN {
             let g = pts.f[p].transpose() * st.grad[c];
-            s = s.max((ws.pk1[p] * g).norm() * pts.vol0[p]);
+            s = s.max(stress * g.norm() * pts.vol0[p]);
         }
     }
     s
@@ -676,6 +700,61 @@ fn internal_force_scale<const D: usize>(pts: &Points<D>, ws: &Workspace<D>) -> f
 /// Builds K = M/Δt² + Σ_p V_p⁰ G·A·G (Eq. A.3) with the bound dofs' rows replaced by identity, and
 /// solves K Δu = R (Eq. 15); bound dofs get Δu = their target − u.
 fn assemble_and_solve<const D: usize>(
+    pts: &Points<D>,
+    locking: Locking,
+    ws: &mut Workspace<D>,
+    dt: f64,
+    step: usize,
+) -> Result<(), String> {
+    factorize(pts, locking, ws, dt, step)?;
+    let ndof = ws.res.len();
+    let lu = ws.lu.as_ref().expect("factorized above");
+    let mut rhs = FMat::<f64>::from_fn(ndof, 1, |r, _| match ws.state[r] {
+        DofState::Free => ws.res[r],
+        DofState::Fixed(v) => v - ws.u[r],
+        DofState::Wall(_) => 0.0,
+    });
+    lu.solve_in_place(rhs.as_mut());
+    for r in 0..ndof {
+        ws.du[r] = rhs[(r, 0)];
+        if !ws.du[r].is_finite() {
+            return Err(format!("step {step}: singular stiffness matrix (non-finite Newton increment)"));
+        }
+    }
+    Ok(())
+}
+
+/// Compliance of the body at its current state and active set: for each dof in `dofs`, the
+/// displacement of every dof in `dofs` under a unit force on it, row-major in `out`
+/// (|dofs|² entries), from the factorization of the last assembled tangent M/Δt² + K. Bound and
+/// prescribed dofs do not move (their rows are identities with zero right-hand side), so their
+/// rows and columns are zero. This is the body's block of the Delassus operator of Contact Dynamics.
+pub(super) fn compliance<const D: usize>(ws: &Workspace<D>, dofs: &[usize], out: &mut Vec<f64>) {
+    let m = dofs.len();
+    out.clear();
+    out.resize(m * m, 0.0);
+    let Some(lu) = ws.lu.as_ref() else { return };
+    let ndof = ws.res.len();
+    let free = |k: usize| ws.state[k] == DofState::Free;
+    let mut rhs = FMat::<f64>::zeros(ndof, m);
+    for (j, &k) in dofs.iter().enumerate() {
+        if free(k) {
+            rhs[(k, j)] = 1.0;
+        }
+    }
+    lu.solve_in_place(rhs.as_mut());
+    for (j, &kj) in dofs.iter().enumerate() {
+        for (i, &ki) in dofs.iter().enumerate() {
+            if free(ki) && free(kj) {
+                out[i * m + j] = rhs[(ki, j)];
+            }
+        }
+    }
+}
+
+/// Assembles the Newton matrix M/Δt² + K at the current state (identity rows for bound and
+/// prescribed dofs) and keeps its sparse LU factorization in `ws.lu`.
+pub(super) fn factorize<const D: usize>(
     pts: &Points<D>,
     locking: Locking,
     ws: &mut Workspace<D>,
@@ -731,18 +810,7 @@ fn assemble_and_solve<const D: usize>(
         .map_err(|e| format!("step {step}: sparse LU (symbolic) failed: {e:?}"))?;
     let lu = Lu::try_new_with_symbolic(sym, k.as_ref())
         .map_err(|e| format!("step {step}: sparse LU failed: {e:?}"))?;
-    let mut rhs = FMat::<f64>::from_fn(ndof, 1, |r, _| match ws.state[r] {
-        DofState::Free => ws.res[r],
-        DofState::Fixed(v) => v - ws.u[r],
-        DofState::Wall(_) => 0.0,
-    });
-    lu.solve_in_place(rhs.as_mut());
-    for r in 0..ndof {
-        ws.du[r] = rhs[(r, 0)];
-        if !ws.du[r].is_finite() {
-            return Err(format!("step {step}: singular stiffness matrix (non-finite Newton increment)"));
-        }
-    }
+    ws.lu = Some(lu);
     Ok(())
 }
 

@@ -14,6 +14,7 @@
 pub mod cli;
 pub mod constitutive;
 pub mod contact;
+mod delassus;
 mod fbar;
 pub mod grid;
 pub mod implicit;
