@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+use super::compaction::{box_walls, CompactionLog};
 use super::constitutive::{inverse, Constitutive, Law, Mat};
 use super::contact::{step_bodies, ContactWorkspace};
 use super::grid::Vector;
@@ -68,6 +69,11 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
     let mut bcsv = String::from("step,time,body,x,y,vx,vy\n");
     let (mut fd, mut f19, mut sg) = (Vec::new(), Vec::new(), Vec::new());
     let mut ws = ContactWorkspace::default();
+    // A packing in a box also reports the compaction measures (packing.csv).
+    let mut compaction = match box_walls::<D>(&setup.walls) {
+        Some(w) if setup.bodies.len() > 1 => Some(CompactionLog::new(w, &setup.walls, &setup.bodies)),
+        _ => None,
+    };
     let started = Instant::now();
     let mut total_iters = 0;
     let mut failure = None;
@@ -87,6 +93,9 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
         }
         if (k + 1) % scene.output_every != 0 && k + 1 != scene.steps {
             continue;
+        }
+        if let Some(c) = compaction.as_mut() {
+            c.record(k + 1, (k + 1) as f64 * setup.options.dt, &setup.bodies, &setup.walls, &rep);
         }
         let (gm, sm) = mean_strain_stress(&setup.bodies[0].points, &setup.bodies[0].law);
         let (mut d, mut ft, mut fb, mut gp) = (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
@@ -146,6 +155,10 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
     let wall = started.elapsed().as_secs_f64();
     std::fs::write(out.join("history.csv"), csv).map_err(|e| format!("cannot write history.csv: {e}"))?;
     std::fs::write(out.join("bodies.csv"), bcsv).map_err(|e| format!("cannot write bodies.csv: {e}"))?;
+    if let Some(c) = &compaction {
+        std::fs::write(out.join("packing.csv"), &c.csv)
+            .map_err(|e| format!("cannot write packing.csv: {e}"))?;
+    }
     let mut pts = String::from("body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy\n");
     let mut snap = Vec::new();
     let mut n_points = 0;

@@ -26,6 +26,8 @@
 //! the Signorini and Coulomb graphs by projected Gauss–Seidel. The iteration stops when no force
 //! update changes a nodal relative displacement by more than `tolerance` × h over the step.
 
+use rayon::prelude::*;
+
 use super::delassus::Delassus;
 use super::grid::{Grid, Vector};
 use super::implicit::{finish, prepare, solve, Body, DofState, StepOptions, Wall, Workspace};
@@ -83,6 +85,8 @@ pub struct ContactReport {
     /// Nodes carrying mass of two bodies, and how many of them push (r·n > 0).
     pub contact_nodes: usize,
     pub active_contacts: usize,
+    /// Pairs of bodies with at least one pushing contact node (the contacts of the packing).
+    pub touching_pairs: usize,
     /// Σ r·n over the body–body contact nodes (N, or N/m in 2-D).
     pub contact_normal_force: f64,
     /// The last iteration's largest change of a nodal relative displacement [m].
@@ -146,9 +150,23 @@ pub fn step_bodies<const D: usize>(
     cws.bodies.resize_with(nb, Workspace::default);
     cws.mass_grad.resize_with(nb, Vec::new);
     cws.wall_ft.resize_with(nb, Vec::new);
+    // Proper grids follow their bodies (one cell of room for the step's motion).
+    for body in bodies.iter_mut() {
+        let (mut lo, mut hi) = (Vector::<D>::repeat(f64::INFINITY), Vector::<D>::repeat(f64::NEG_INFINITY));
+        for x in &body.points.x {
+            lo = lo.inf(x);
+            hi = hi.sup(x);
+        }
+        body.grid.follow(&lo, &hi, 1);
+    }
+    // The bodies' own work runs in parallel (Section 5: each particle's MPM solve is independent
+    // given the contact forces); the results do not depend on the number of threads.
+    bodies
+        .par_iter()
+        .zip(cws.bodies.par_iter_mut())
+        .try_for_each(|(body, ws)| prepare(body, walls, &[], opt, step, ws))?;
     for (b, body) in bodies.iter().enumerate() {
         let ws = &mut cws.bodies[b];
-        prepare(body, walls, &[], opt, step, ws)?;
         let mg = &mut cws.mass_grad[b];
         mg.clear();
         mg.resize(body.grid.n_nodes(), Vector::<D>::zeros());
@@ -238,10 +256,13 @@ pub fn step_bodies<const D: usize>(
                 cws.bodies[c.b].fext[c.nb * D + d] += c.r[d];
             }
         }
-        for (b, body) in bodies.iter().enumerate() {
-            let rep = solve(body, walls, opt, step, &mut cws.bodies[b], it > 1)?;
-            report.newton_iterations += rep.iterations;
-        }
+        report.newton_iterations += bodies
+            .par_iter()
+            .zip(cws.bodies.par_iter_mut())
+            .map(|(body, ws)| solve(body, walls, opt, step, ws, it > 1).map(|r| r.iterations))
+            .collect::<Result<Vec<_>, String>>()?
+            .iter()
+            .sum::<usize>();
         let corr = cws.delassus.update(
             bodies,
             walls,
@@ -280,16 +301,23 @@ pub fn step_bodies<const D: usize>(
             }
         }
     }
+    // The nodes of one pair are consecutive (built pair by pair above).
+    let mut last_pair = None;
     for c in &cws.nodes {
         let rn = c.r.dot(&c.n);
         if rn > 0.0 {
             report.active_contacts += 1;
             report.contact_normal_force += rn;
+            if last_pair != Some((c.a, c.b)) {
+                report.touching_pairs += 1;
+                last_pair = Some((c.a, c.b));
+            }
         }
     }
-    for (b, body) in bodies.iter_mut().enumerate() {
-        finish(body, opt, step, &cws.bodies[b])?;
-    }
+    bodies
+        .par_iter_mut()
+        .zip(cws.bodies.par_iter())
+        .try_for_each(|(body, ws)| finish(body, opt, step, ws))?;
     Ok(report)
 }
 

@@ -19,6 +19,8 @@
 //! discs at h = 0.5 mm, Δt = 5 µs, a node still moved by 1e-5 m (the whole approach over the step)
 //! after 500 re-solves. With C the re-solves only correct the nonlinearity of the bodies.
 
+use rayon::prelude::*;
+
 use super::constitutive::Mat;
 use super::contact::{project_disc, signorini_coulomb, ContactNode, ContactOptions};
 use super::grid::Vector;
@@ -52,7 +54,6 @@ pub struct Delassus<const D: usize> {
     /// Per body: the contact nodes (active indices) and the slot of each active node.
     nodes: Vec<Vec<usize>>,
     slot_of: Vec<Vec<usize>>,
-    dofs: Vec<usize>,
     /// Per body: the compliance block over its contact dofs (row-major) and their displacements.
     comp: Vec<Vec<f64>>,
     u: Vec<Vec<f64>>,
@@ -156,22 +157,29 @@ impl<const D: usize> Delassus<D> {
         // Each body's compliance over its contact dofs, at its solution.
         self.comp.resize_with(nb, Vec::new);
         self.u.resize_with(nb, Vec::new);
-        for b in 0..nb {
-            self.u[b].clear();
-            if self.nodes[b].is_empty() {
-                self.comp[b].clear();
-                continue;
-            }
-            factorize(&bodies[b].points, opt.locking, &mut ws[b], opt.dt, step)?;
-            self.dofs.clear();
-            for &a in &self.nodes[b] {
-                for d in 0..D {
-                    self.dofs.push(a * D + d);
-                    self.u[b].push(ws[b].u[a * D + d]);
+        // In parallel over bodies (independent factorizations and back-substitutions).
+        bodies
+            .par_iter()
+            .zip(ws.par_iter_mut())
+            .zip(self.nodes.par_iter())
+            .zip(self.comp.par_iter_mut().zip(self.u.par_iter_mut()))
+            .try_for_each(|(((body, w), nodes), (comp, u))| -> Result<(), String> {
+                u.clear();
+                if nodes.is_empty() {
+                    comp.clear();
+                    return Ok(());
                 }
-            }
-            compliance(&ws[b], &self.dofs, &mut self.comp[b]);
-        }
+                factorize(&body.points, opt.locking, w, opt.dt, step)?;
+                let mut dofs = Vec::with_capacity(nodes.len() * D);
+                for &a in nodes {
+                    for d in 0..D {
+                        dofs.push(a * D + d);
+                        u.push(w.u[a * D + d]);
+                    }
+                }
+                compliance(w, &dofs, comp);
+                Ok(())
+            })?;
         for l in self.links.iter_mut() {
             let mut w = block(&self.comp[l.b.0], self.nodes[l.b.0].len(), l.b.1);
             if let Some((a, s)) = l.a {

@@ -45,6 +45,29 @@ impl<const D: usize> Grid<D> {
         Ok(Self { origin, h, cells })
     }
 
+    /// Keeps a body's proper grid around its points as it moves (multi-mesh scheme, Section 2.2):
+    /// when the points' bounding box [lo, hi] comes within `room` cells of the grid's edge, the
+    /// window is re-centred on the box by a whole number of cells (so it stays on the common
+    /// lattice) and widened if the box has outgrown it. A grid carries no state between steps
+    /// (Section 2), so moving it changes nothing else. Returns whether it moved.
+    pub fn follow(&mut self, lo: &Vector<D>, hi: &Vector<D>, room: usize) -> bool {
+        let pad = room as f64 * self.h;
+        let fits = (0..D).all(|d| {
+            lo[d] - pad >= self.origin[d] && hi[d] + pad <= self.origin[d] + self.cells[d] as f64 * self.h
+        });
+        if fits {
+            return false;
+        }
+        for d in 0..D {
+            let need = ((hi[d] - lo[d]) / self.h).ceil() as usize + 2 * room + 2;
+            self.cells[d] = self.cells[d].max(need);
+            let centre = 0.5 * (lo[d] + hi[d]);
+            let now = self.origin[d] + 0.5 * self.cells[d] as f64 * self.h;
+            self.origin[d] += ((centre - now) / self.h).round() * self.h;
+        }
+        true
+    }
+
     /// Nodes along each axis.
     pub fn nodes_per_axis(&self) -> [usize; D] {
         self.cells.map(|c| c + 1)

@@ -12,11 +12,13 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod cli;
+pub mod compaction;
 pub mod constitutive;
 pub mod contact;
 mod delassus;
 mod fbar;
 pub mod grid;
 pub mod implicit;
+pub mod packing;
 pub mod points;
 pub mod scene;

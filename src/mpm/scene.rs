@@ -8,6 +8,7 @@ use super::constitutive::{Hooke, Law, NeoHookean, SaintVenantKirchhoff};
 use super::contact::ContactOptions;
 use super::grid::{Grid, Vector};
 use super::implicit::{Body, Locking, Newton, StepOptions, Wall};
+use super::packing::PackingSpec;
 use super::points::Points;
 
 #[derive(Clone, Debug, Deserialize)]
@@ -21,6 +22,9 @@ pub struct Scene {
     pub body: Option<BodySpec>,
     #[serde(default)]
     pub bodies: Option<Vec<BodySpec>>,
+    /// Or a generated packing of discs (spheres) in a box.
+    #[serde(default)]
+    pub packing: Option<PackingSpec>,
     pub grid: GridSpec,
     #[serde(default)]
     pub walls: Vec<WallSpec>,
@@ -190,11 +194,17 @@ impl Scene {
         if !(0.0..=1.0).contains(&self.flip) {
             return Err(format!("flip must lie in [0, 1], got {}", self.flip));
         }
+        let generated = match &self.packing {
+            Some(p) if self.body.is_none() && self.bodies.is_none() => p.bodies(D)?,
+            Some(_) => return Err("scene: give one of \"body\", \"bodies\" or \"packing\", not both".into()),
+            None => Vec::new(),
+        };
         let specs: Vec<&BodySpec> = match (&self.body, &self.bodies) {
+            _ if !generated.is_empty() => generated.iter().collect(),
             (Some(b), None) => vec![b],
             (None, Some(v)) if !v.is_empty() => v.iter().collect(),
             (None, Some(_)) => return Err("bodies: the list is empty".into()),
-            (None, None) => return Err("scene: give \"body\" or \"bodies\"".into()),
+            (None, None) => return Err("scene: give \"body\", \"bodies\" or \"packing\"".into()),
             (Some(_), Some(_)) => return Err("scene: give either \"body\" or \"bodies\", not both".into()),
         };
         let mut bodies = Vec::new();
