@@ -1,6 +1,7 @@
 //! `mcdem study shear` in miniature: Bagnold scaling below jamming, rate independence above it,
 //! resumability and the output files.
 
+use mcdem::physics::pair::ContactError;
 use mcdem::study::shear::{
     classify, run, run_one, run_refined, Grid, Options, Protocol, RunResult, RunSpec, Stop, NUMERICAL,
     OUT_OF_RANGE,
@@ -196,6 +197,7 @@ fn dense_frictional_stop_is_out_of_the_model_range_and_hertz_runs_on() {
     assert!(e.contains("with Δt/2") && e.contains("reached the particle radius"), "{e}");
     let s1 = run_refined(&spec, &proto, 1).expect_err("stops at Δt");
     let s2 = run_refined(&spec, &proto, 2).expect_err("stops at Δt/2");
+    assert!(s1.is_overlap_limit() && s2.is_overlap_limit(), "{:?} {:?}", s1.contact, s2.contact);
     let (g1, g2) = (s1.strain.unwrap(), s2.strain.unwrap());
     eprintln!("stop strain {g1:.4} at dt, {g2:.4} at dt/2");
     assert!(g1 > 0.05 && (g1 - g2).abs() < 0.1 * g1, "{g1} {g2}");
@@ -219,6 +221,7 @@ fn stop_classification_follows_the_time_step_refinement() {
     let radius = |g: f64| Stop {
         strain: Some(g),
         message: "overlap 1e-3 m reached the particle radius 1e-3 m".into(),
+        contact: Some(ContactError::OverlapBeyondRadius { overlap: 1e-3, radius: 1e-3 }),
     };
     let script = |out: Vec<Option<f64>>| {
         let ok = ok.clone();
@@ -240,6 +243,15 @@ fn stop_classification_follows_the_time_step_refinement() {
     assert_eq!(r.stopped_at_full_step, Some(0.30));
     let r = classify(script(vec![None, None, None])).unwrap();
     assert_eq!(r.stopped_at_full_step, None);
-    let e = classify(|_| Err(Stop { strain: None, message: "random placement failed".into() })).unwrap_err();
+    let e =
+        classify(|_| Err(Stop { strain: None, message: "random placement failed".into(), contact: None }))
+            .unwrap_err();
     assert!(!e.starts_with(OUT_OF_RANGE) && !e.starts_with(NUMERICAL) && e.contains("compression"), "{e}");
+    // The cause is the typed contact error, not the words: the range stop's text without its cause
+    // passes through unclassified, and another contact error (no normal) is not a range stop.
+    let text_only = |g: f64| Stop { contact: None, ..radius(g) };
+    let e = classify(|_| Err(text_only(0.30))).unwrap_err();
+    assert!(!e.starts_with(OUT_OF_RANGE) && !e.starts_with(NUMERICAL) && e.contains("Δt/1"), "{e}");
+    let coincident = Stop { contact: Some(ContactError::CoincidentCentres), ..radius(0.30) };
+    assert!(!coincident.is_overlap_limit() && radius(0.30).is_overlap_limit());
 }

@@ -148,5 +148,5 @@ pub(super) fn contact_error(step: u64, particle: i64, other: Option<i64>, e: Con
         Some(j) => format!("contact with particle {j}"),
         None => "wall contact".to_string(),
     };
-    StepError { step, particle, cause: format!("{with}: {e}") }
+    StepError { step, particle, cause: format!("{with}: {e}"), contact: Some(e) }
 }

@@ -81,6 +81,7 @@ impl World {
                         step,
                         particle: id[i],
                         cause: "position or velocity is not finite".into(),
+                        contact: None,
                     });
                 }
             }

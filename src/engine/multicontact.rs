@@ -342,6 +342,7 @@ impl McCtx<'_> {
                     step: self.step,
                     particle: self.p.id[i],
                     cause: format!("multi-contact kernel: {e}"),
+                    contact: None,
                 })?;
                 counts.contacts += nl as u64;
                 counts.fallbacks += summary.fallbacks as u64;

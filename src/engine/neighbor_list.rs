@@ -105,6 +105,7 @@ impl World {
                             lo,
                             hi
                         ),
+                        contact: None,
                     });
                 }
             }

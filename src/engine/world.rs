@@ -4,6 +4,7 @@ use std::fmt;
 
 use crate::physics::contact_set::InfluenceCache;
 use crate::physics::hertz::Tangential;
+use crate::physics::pair::ContactError;
 use crate::physics::{Material, PairCoeffs, Vec3};
 use crate::team::Team;
 
@@ -29,7 +30,13 @@ pub enum Closure {
 pub struct StepError {
     pub step: u64,
     pub particle: i64,
+    /// The cause in words (the text of [`StepError::contact`] when it is set, with the partner).
     pub cause: String,
+    /// The contact law's own error when a contact stopped the run (overlap beyond a radius,
+    /// coincident centres, a non-finite force); `None` for the other stops (a lost particle, a
+    /// non-finite position, the multi-contact kernel). Callers that act on the cause read this,
+    /// not the text.
+    pub contact: Option<ContactError>,
 }
 
 impl fmt::Display for StepError {

@@ -180,16 +180,32 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
         bar.tick();
     };
     let t = Instant::now();
-    // Resumable: every finished ν is appended to a journal in the output directory, and a rerun
-    // with the same mode takes the ν it finds there instead of fitting them again.
     let journal =
         opts.out.join(if opts.quick { "calibration_done_quick.jsonl" } else { "calibration_done.jsonl" });
+    let fit = |nu: f64| calibrate_one(nu, &s, kind, &scratch.join(format!("nu{nu}")), &say);
+    let fits = fit_resumable(&s.nus, &journal, &fit, &say);
+    bar.finish_and_clear();
+    let fits = fits?;
+    write_outputs(opts, &s, kind, &fits, t.elapsed().as_secs_f64())?;
+    Ok(fits)
+}
+
+/// The resumable loop of [`run`]: fits every ν of `nus` with `fit` (two at a time, one per core)
+/// and returns the fits sorted by ν. Every finished ν is appended to `journal` (one JSON line), and
+/// a ν found there is taken from it instead of being fitted again, so a run stopped part way and
+/// started again with the same mode finishes with the fits of an uninterrupted run.
+pub fn fit_resumable(
+    nus: &[f64],
+    journal: &Path,
+    fit: &(dyn Fn(f64) -> Result<Fit, String> + Sync),
+    say: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Fit>, String> {
     let same = |a: f64, b: f64| (a - b).abs() < 1e-12;
-    let done: Vec<Fit> = std::fs::read_to_string(&journal)
+    let done: Vec<Fit> = std::fs::read_to_string(journal)
         .unwrap_or_default()
         .lines()
         .filter_map(|l| serde_json::from_str::<Fit>(l).ok())
-        .filter(|f| s.nus.iter().any(|&nu| same(nu, f.nu)))
+        .filter(|f| nus.iter().any(|&nu| same(nu, f.nu)))
         .collect();
     for f in &done {
         say(&format!(
@@ -200,29 +216,27 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
             f.mpr
         ));
     }
-    let todo: Vec<f64> = s.nus.iter().copied().filter(|&nu| !done.iter().any(|f| same(f.nu, nu))).collect();
+    let todo: Vec<f64> = nus.iter().copied().filter(|&nu| !done.iter().any(|f| same(f.nu, nu))).collect();
     let append = Mutex::new(());
     let fits: Vec<Result<Fit, String>> = todo
         .par_iter()
         .map(|&nu| {
-            let fit = calibrate_one(nu, &s, kind, &scratch.join(format!("nu{nu}")), &say)?;
+            let fit = fit(nu)?;
             let _g = append.lock();
             let line = serde_json::to_string(&fit).map_err(|e| e.to_string())? + "\n";
             use std::io::Write;
             std::fs::OpenOptions::new()
                 .create(true)
                 .append(true)
-                .open(&journal)
+                .open(journal)
                 .and_then(|mut f| f.write_all(line.as_bytes()))
                 .map_err(|e| format!("cannot write {}: {e}", journal.display()))?;
             Ok(fit)
         })
         .collect();
-    bar.finish_and_clear();
     let mut fits: Vec<Fit> = fits.into_iter().collect::<Result<_, _>>()?;
     fits.extend(done);
     fits.sort_by(|a, b| a.nu.total_cmp(&b.nu));
-    write_outputs(opts, &s, kind, &fits, t.elapsed().as_secs_f64())?;
     Ok(fits)
 }
 

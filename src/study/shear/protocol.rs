@@ -6,9 +6,10 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{Closure, Domain, World};
+use crate::engine::{Closure, Domain, StepError, World};
 use crate::physics::ghods2022::MprTest;
 use crate::physics::hertz::Tangential;
+use crate::physics::pair::ContactError;
 use crate::physics::{Material, Vec3};
 
 /// Particle diameter [m] (the paper's App. B hydrogel spheres). Results are dimensionless, so d
@@ -233,7 +234,7 @@ pub(super) fn random_positions(n: usize, l: f64, d: f64, rng: &mut Rng) -> Resul
 
 /// A World at φ (after the affine compression), not yet sheared, sorted, at the step Δt/`refine`.
 fn prepare_refined(spec: &RunSpec, compress_steps: u64, refine: u32) -> Result<(World, f64), Stop> {
-    prepare_with(spec, compress_steps, true, refine).map_err(|message| Stop { strain: None, message })
+    prepare_with(spec, compress_steps, true, refine)
 }
 
 /// A World at φ (after the affine compression), not yet sheared, with or without spatial sorting
@@ -243,17 +244,12 @@ pub(super) fn prepare_sorted(
     compress_steps: u64,
     sort: bool,
 ) -> Result<(World, f64), String> {
-    prepare_with(spec, compress_steps, sort, 1)
+    prepare_with(spec, compress_steps, sort, 1).map_err(|s| s.message)
 }
 
 /// The step is Δt/`refine` and the compression takes `refine` times `compress_steps` steps, so that
 /// it runs at the same rate in time at every step size.
-fn prepare_with(
-    spec: &RunSpec,
-    compress_steps: u64,
-    sort: bool,
-    refine: u32,
-) -> Result<(World, f64), String> {
+fn prepare_with(spec: &RunSpec, compress_steps: u64, sort: bool, refine: u32) -> Result<(World, f64), Stop> {
     let compress_steps = compress_steps * u64::from(refine);
     let d = DIAMETER;
     let vs = spec.n as f64 * std::f64::consts::PI / 6.0 * d.powi(3);
@@ -297,7 +293,7 @@ fn prepare_with(
             dom.hi = Vec3::repeat(target);
         }
         cur = target;
-        w.step().map_err(|e| format!("compression: {e}"))?;
+        w.step().map_err(|e| Stop::engine(None, "compression", e))?;
     }
     if let Some(dom) = w.domain.as_mut() {
         dom.hi = Vec3::repeat(l);
@@ -362,12 +358,27 @@ pub(super) fn start_shear(w: &mut World, gdot: f64, l: f64) {
 pub struct Stop {
     pub strain: Option<f64>,
     pub message: String,
+    /// The contact law's error when a contact stopped the engine ([`StepError::contact`]);
+    /// `None` for any other stop (placement, setup, a lost particle, ...).
+    pub contact: Option<ContactError>,
+}
+
+impl From<String> for Stop {
+    /// A stop before the run started (placement, materials, setup): no strain, no contact cause.
+    fn from(message: String) -> Self {
+        Stop { strain: None, message, contact: None }
+    }
 }
 
 impl Stop {
+    /// The engine stopped at `strain` during `stage`: its message and its typed contact cause.
+    pub fn engine(strain: Option<f64>, stage: &str, e: StepError) -> Self {
+        Stop { strain, message: format!("{stage}: {e}"), contact: e.contact }
+    }
+
     /// The engine's contact-range stop (`physics::pair`): an overlap reached a particle radius.
     pub fn is_overlap_limit(&self) -> bool {
-        self.message.contains("reached the particle radius")
+        matches!(self.contact, Some(ContactError::OverlapBeyondRadius { .. }))
     }
 
     fn at(&self) -> String {
@@ -470,7 +481,7 @@ pub fn run_refined(spec: &RunSpec, proto: &Protocol, refine: u32) -> Result<RunR
         for s in 1..=steps_per_window {
             if let Err(e) = w.step() {
                 let strain = (windows.len() as f64 + s as f64 / steps_per_window as f64) * proto.window;
-                return Err(Stop { strain: Some(strain), message: format!("shear: {e}") });
+                return Err(Stop::engine(Some(strain), "shear", e));
             }
             if s % every == 0 {
                 acc.add(&sample(&w));
