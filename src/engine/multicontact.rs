@@ -3,6 +3,7 @@
 //! Eq. 3 where the material carries a cap), through [`crate::physics::contact_set`].
 
 use std::cell::RefCell;
+use std::ops::Range;
 use std::sync::Mutex;
 
 use crate::physics::contact_set::{
@@ -11,9 +12,9 @@ use crate::physics::contact_set::{
 use crate::physics::{Material, Vec3};
 use crate::team::{SplitMut, Team};
 
-use super::contacts::PairHist;
+use super::contacts::{Pair, PairHist};
 use super::particles::Particles;
-use super::{StepError, World};
+use super::{Domain, StepError, World};
 
 /// What the multi-contact pass keeps between steps (no allocation in the loop).
 #[derive(Debug, Default)]
@@ -150,42 +151,34 @@ impl World {
         if stale || self.multi.slots_stale {
             self.build_slots();
         }
-        let McState { mc_types: types, slot_start, pair_mc, pair_slot, wall_slot, slot_loads: loads, .. } =
-            &mut self.multi;
-        let p = &self.p;
-        // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
-        let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
         // Every taking part pair's contact points and previous force, written straight into the
-        // slots of both particles, so that the kernel reads each particle's contacts as one slice.
-        // Contact points once per pair, both sides from one centre distance; as LIGGGHTS: the
-        // midpoint of the modified spheres' surfaces along the centre line when loaded, else each
-        // particle's own surface point.
-        loads.resize(slot_start[n] as usize, ContactLoad { point: Vec3::zeros(), force: 0.0 });
-        let taking_part = pair_mc.iter().zip(pair_slot.iter());
-        for ((pr, h), (&t, ps)) in self.contacts.pairs.iter().zip(&self.contacts.pair_hist).zip(taking_part) {
-            if !t {
-                continue;
-            }
-            let (a, b) = (pr.i as usize, pr.j as usize);
-            let mut xab = p.x[b] - p.x[a];
-            domain.minimum_image(&mut xab);
-            let len = xab.norm().max(1e-300);
-            let points = if h.fn_prev > eps(a) {
-                let tmp = xab * ((h.ri_prev - h.rj_prev) * 0.5 / len);
-                [tmp + 0.5 * xab, tmp - 0.5 * xab]
-            } else {
-                [xab * (h.ri_prev / len), -xab * (h.rj_prev / len)]
-            };
-            loads[ps[0] as usize] = ContactLoad { point: points[0], force: h.fn_prev };
-            loads[ps[1] as usize] = ContactLoad { point: points[1], force: h.fn_prev };
+        // slots of both particles, so that the kernel reads each particle's contacts as one slice;
+        // on the team (each member a range of pairs) when the kernel pass runs there.
+        let threaded = n >= 2 * MC_GRAIN && self.threads().is_some();
+        let team = self.blocks.team.as_ref().filter(|_| threaded);
+        let np = self.contacts.pairs.len();
+        let m = &mut self.multi;
+        m.slot_loads.resize(m.slot_start[n] as usize, ContactLoad { point: Vec3::zeros(), force: 0.0 });
+        let src = PairSrc {
+            p: &self.p,
+            mc_types: &m.mc_types,
+            domain,
+            pairs: &self.contacts.pairs,
+            hist: &self.contacts.pair_hist,
+            pair_mc: &m.pair_mc,
+            pair_slot: &m.pair_slot,
+        };
+        let loads = SplitMut::new(&mut m.slot_loads);
+        match team {
+            Some(team) => team.for_shares(np, |_, r| src.put_loads(r, &loads)),
+            None => src.put_loads(0..np, &loads),
         }
-        for (c, &sl) in self.contacts.wc.iter().zip(wall_slot.iter()) {
-            loads[sl as usize] = ContactLoad { point: c.rel_prev, force: c.fn_prev };
+        for (c, &sl) in self.contacts.wc.iter().zip(&m.wall_slot) {
+            m.slot_loads[sl as usize] = ContactLoad { point: c.rel_prev, force: c.fn_prev };
         }
         // The kernel particle by particle into one Δ per slot (threads on disjoint particle
         // ranges when they pay), then Δ to the pairs and wall contacts.
         self.multi.slot_dr.resize(self.multi.slot_loads.len(), 0.0);
-        let threaded = n >= 2 * MC_GRAIN && self.threads().is_some();
         let ctx = McCtx {
             p: &self.p,
             mc_types: &self.multi.mc_types,
@@ -209,14 +202,68 @@ impl World {
         if let Some(c) = self.multi.mc_cache.as_mut() {
             c.recomputed += counts.recomputed;
         }
-        let (m, dr) = (&self.multi, &self.multi.slot_dr);
-        for ((d, &t), ps) in self.contacts.pair_dr.iter_mut().zip(&m.pair_mc).zip(&m.pair_slot) {
-            *d = if t { [dr[ps[0] as usize], dr[ps[1] as usize]] } else { [0.0; 2] };
+        let m = &self.multi;
+        let (dr, pair_dr) = (&m.slot_dr, SplitMut::new(&mut self.contacts.pair_dr));
+        let scatter = |r: Range<usize>| {
+            // SAFETY: the members' shares are disjoint ranges of pairs.
+            let out = unsafe { pair_dr.range(r.clone()) };
+            for ((d, &t), ps) in out.iter_mut().zip(&m.pair_mc[r.clone()]).zip(&m.pair_slot[r]) {
+                *d = if t { [dr[ps[0] as usize], dr[ps[1] as usize]] } else { [0.0; 2] };
+            }
+        };
+        match self.blocks.team.as_ref().filter(|_| threaded) {
+            Some(team) => team.for_shares(np, |_, r| scatter(r)),
+            None => scatter(0..np),
         }
         for (c, &sl) in self.contacts.wc.iter_mut().zip(&m.wall_slot) {
             c.dr = dr[sl as usize];
         }
         Ok(())
+    }
+}
+
+/// What the pairs' contact loads are computed from (shared between threads).
+struct PairSrc<'a> {
+    p: &'a Particles,
+    mc_types: &'a [McType],
+    domain: Domain,
+    pairs: &'a [Pair],
+    hist: &'a [PairHist],
+    pair_mc: &'a [bool],
+    pair_slot: &'a [[u32; 2]],
+}
+
+impl PairSrc<'_> {
+    /// The contact points and previous force of the taking part pairs in `r`, into their slots.
+    /// Contact points once per pair, both sides from one centre distance; as LIGGGHTS: the
+    /// midpoint of the modified spheres' surfaces along the centre line when loaded, else each
+    /// particle's own surface point.
+    fn put_loads(&self, r: Range<usize>, loads: &SplitMut<ContactLoad>) {
+        let p = self.p;
+        // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
+        let eps = |a: usize| loaded_threshold(self.mc_types[p.typ[a]].material.youngs_modulus, p.radius[a]);
+        for k in r {
+            if !self.pair_mc[k] {
+                continue;
+            }
+            let (pr, h) = (&self.pairs[k], &self.hist[k]);
+            let (a, b) = (pr.i as usize, pr.j as usize);
+            let mut xab = p.x[b] - p.x[a];
+            self.domain.minimum_image(&mut xab);
+            let len = xab.norm().max(1e-300);
+            let points = if h.fn_prev > eps(a) {
+                let tmp = xab * ((h.ri_prev - h.rj_prev) * 0.5 / len);
+                [tmp + 0.5 * xab, tmp - 0.5 * xab]
+            } else {
+                [xab * (h.ri_prev / len), -xab * (h.rj_prev / len)]
+            };
+            for (&sl, point) in self.pair_slot[k].iter().zip(points) {
+                let sl = sl as usize;
+                // SAFETY: every pair end has a slot of its own (`build_slots`) and the members'
+                // pairs are disjoint, so no slot is written twice.
+                unsafe { loads.range(sl..sl + 1)[0] = ContactLoad { point, force: h.fn_prev } };
+            }
+        }
     }
 }
 
