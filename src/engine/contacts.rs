@@ -63,14 +63,6 @@ impl PairHist {
 /// This step's multi-contact radius changes of a pair: [Δ of i at this contact, Δ of j].
 pub(super) type PairDr = [f64; 2];
 
-/// A pair's contact as the multi-contact kernel sees it: the contact points relative to i and to
-/// j, and the previous step's normal force.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct PairLoad {
-    pub(super) points: [Vec3; 2],
-    pub(super) force: f64,
-}
-
 /// One touching particle pair as output sees it (indices into the particle arrays).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairContact {

@@ -3,17 +3,18 @@
 //! Eq. 3 where the material carries a cap), through [`crate::physics::contact_set`].
 
 use std::cell::RefCell;
+use std::ops::Range;
 use std::sync::Mutex;
 
 use crate::physics::contact_set::{
     loaded_threshold, radius_changes, ContactLoad, InfluenceCache, KeptInfluence, McParams,
 };
-use crate::physics::Material;
+use crate::physics::{Material, Vec3};
 use crate::team::{SplitMut, Team};
 
-use super::contacts::{PairHist, PairLoad, WallContact};
+use super::contacts::{Pair, PairHist};
 use super::particles::Particles;
-use super::{StepError, World};
+use super::{Domain, StepError, World};
 
 /// What the multi-contact pass keeps between steps (no allocation in the loop).
 #[derive(Debug, Default)]
@@ -23,16 +24,22 @@ pub(super) struct McState {
     /// Neighbour builds at the last full multi-contact pass (a build renumbers the pairs).
     pub(super) mc_builds: u64,
     pub(super) mc_types: Vec<McType>,
+    /// Per particle, its first slot (compressed rows: particle i owns slots
+    /// `slot_start[i]..slot_start[i + 1]`, its pairs in pair order, then its wall contacts).
     pub(super) slot_start: Vec<u32>,
-    pub(super) slots: Vec<Slot>,
+    /// Per pair in the multi-contact set: its slot at i and at j (unused for the other pairs).
+    pub(super) pair_slot: Vec<[u32; 2]>,
+    /// Per wall contact: its slot.
+    pub(super) wall_slot: Vec<u32>,
     pub(super) slot_fill: Vec<u32>,
+    /// Per slot: the contact point and previous force the kernel reads, written in slot order
+    /// so that a particle's contact list is one contiguous slice (no gather in the kernel pass).
+    pub(super) slot_loads: Vec<ContactLoad>,
     /// Radius change per slot, from this step's kernel pass.
     pub(super) slot_dr: Vec<f64>,
     /// The slot lists no longer match the pairs and wall contacts (neighbour build, a wall
     /// contact appeared or left, a pair entered or left the multi-contact set).
     pub(super) slots_stale: bool,
-    /// Per pair: what this step's multi-contact pass reads (filled for pairs taking part).
-    pub(super) pair_loads: Vec<PairLoad>,
     /// Geometry tolerance: the kept influence matrices, one per particle.
     pub(super) mc_cache: Option<InfluenceCache>,
     pub(super) pair_mc: Vec<bool>,
@@ -42,14 +49,6 @@ pub(super) struct McState {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct McType {
     pub(super) material: Material,
-}
-
-/// Indirection from a particle to one of its contacts, for the multi-contact pass.
-#[derive(Debug, Clone, Copy)]
-pub(super) enum Slot {
-    PairI(u32),
-    PairJ(u32),
-    Wall(u32),
 }
 
 /// Particles per leaf of the threaded multi-contact pass.
@@ -68,39 +67,39 @@ impl World {
     /// contacts), as compressed rows. Rebuilt only when the pairs or wall contacts changed.
     pub(super) fn build_slots(&mut self) {
         let n = self.p.len();
-        self.multi.slot_start.clear();
-        self.multi.slot_start.resize(n + 1, 0);
-        for (pr, _) in self.contacts.pairs.iter().zip(&self.multi.pair_mc).filter(|(_, m)| **m) {
-            self.multi.slot_start[pr.i as usize + 1] += 1;
-            self.multi.slot_start[pr.j as usize + 1] += 1;
+        let m = &mut self.multi;
+        m.slot_start.clear();
+        m.slot_start.resize(n + 1, 0);
+        for (pr, _) in self.contacts.pairs.iter().zip(&m.pair_mc).filter(|(_, t)| **t) {
+            m.slot_start[pr.i as usize + 1] += 1;
+            m.slot_start[pr.j as usize + 1] += 1;
         }
         for c in &self.contacts.wc {
-            self.multi.slot_start[c.p as usize + 1] += 1;
+            m.slot_start[c.p as usize + 1] += 1;
         }
         for i in 0..n {
-            self.multi.slot_start[i + 1] += self.multi.slot_start[i];
+            m.slot_start[i + 1] += m.slot_start[i];
         }
-        let total = self.multi.slot_start[n] as usize;
-        self.multi.slots.clear();
-        self.multi.slots.resize(total, Slot::Wall(0));
-        self.multi.slot_fill.clear();
-        self.multi.slot_fill.extend_from_slice(&self.multi.slot_start[..n]);
-        for (k, pr) in self.contacts.pairs.iter().enumerate() {
-            if !self.multi.pair_mc[k] {
+        m.slot_fill.clear();
+        m.slot_fill.extend_from_slice(&m.slot_start[..n]);
+        m.pair_slot.clear();
+        m.pair_slot.resize(self.contacts.pairs.len(), [0; 2]);
+        for ((pr, &t), ps) in self.contacts.pairs.iter().zip(&m.pair_mc).zip(m.pair_slot.iter_mut()) {
+            if !t {
                 continue;
             }
             let (i, j) = (pr.i as usize, pr.j as usize);
-            self.multi.slots[self.multi.slot_fill[i] as usize] = Slot::PairI(k as u32);
-            self.multi.slot_fill[i] += 1;
-            self.multi.slots[self.multi.slot_fill[j] as usize] = Slot::PairJ(k as u32);
-            self.multi.slot_fill[j] += 1;
+            *ps = [m.slot_fill[i], m.slot_fill[j]];
+            m.slot_fill[i] += 1;
+            m.slot_fill[j] += 1;
         }
-        for (k, c) in self.contacts.wc.iter().enumerate() {
+        m.wall_slot.clear();
+        for c in &self.contacts.wc {
             let i = c.p as usize;
-            self.multi.slots[self.multi.slot_fill[i] as usize] = Slot::Wall(k as u32);
-            self.multi.slot_fill[i] += 1;
+            m.wall_slot.push(m.slot_fill[i]);
+            m.slot_fill[i] += 1;
         }
-        self.multi.slots_stale = false;
+        m.slots_stale = false;
     }
 
     /// Multi-contact pass (LIGGGHTS `fix multicontact/halfspace` pre_force): radius change of
@@ -134,60 +133,57 @@ impl World {
             self.contacts.pair_hist.clear();
             self.contacts.pair_hist.resize(self.contacts.pairs.len(), PairHist::NEW);
         }
-        self.multi.pair_loads.resize(self.contacts.pairs.len(), PairLoad::default());
-        // Pairs outside the multi-contact set get no slot, hence no change.
-        self.contacts.pair_dr.clear();
-        self.contacts.pair_dr.resize(self.contacts.pairs.len(), [0.0; 2]);
-        let (p, types) = (&self.p, &self.multi.mc_types);
-        // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
-        let eps = |a: usize| loaded_threshold(types[p.typ[a]].material.youngs_modulus, p.radius[a]);
-        // One pass over the pairs (at large N they no longer fit in cache): reset the radius
-        // changes, decide who takes part, and give the kernel each taking part pair's contact
-        // points and previous force in a compact array, so its gather does not touch the pairs.
-        // A pair takes part if loaded, or close enough that radius growth could make it touch
+        // Pairs outside the multi-contact set get no slot, hence no change (set in the scatter below).
+        if self.contacts.pair_dr.len() != self.contacts.pairs.len() {
+            self.contacts.pair_dr.resize(self.contacts.pairs.len(), [0.0; 2]);
+        }
+        // Who takes part: a pair if loaded, or close enough that radius growth could make it touch
         // (gap below RECEIVER_GAP of the radii at the last evaluation; a pair moves far less than
-        // that in a step): far candidates would only cost kernel time. Contact points once per
-        // pair, both sides from one centre distance; as LIGGGHTS: the midpoint of the modified
-        // spheres' surfaces along the centre line when loaded, else each particle's own surface
-        // point.
+        // that in a step): far candidates would only cost kernel time.
         let mut stale = false;
-        let taking_part = self.multi.pair_mc.iter_mut().zip(self.multi.pair_loads.iter_mut());
-        for ((pr, h), (m, load)) in self.contacts.pairs.iter().zip(&self.contacts.pair_hist).zip(taking_part)
-        {
+        for (h, m) in self.contacts.pair_hist.iter().zip(self.multi.pair_mc.iter_mut()) {
             let now = h.fn_prev > 0.0 || h.near;
             if *m != now {
                 *m = now;
                 stale = true;
             }
-            if !now {
-                continue;
-            }
-            let (a, b) = (pr.i as usize, pr.j as usize);
-            let mut xab = p.x[b] - p.x[a];
-            domain.minimum_image(&mut xab);
-            let len = xab.norm().max(1e-300);
-            load.points = if h.fn_prev > eps(a) {
-                let tmp = xab * ((h.ri_prev - h.rj_prev) * 0.5 / len);
-                [tmp + 0.5 * xab, tmp - 0.5 * xab]
-            } else {
-                [xab * (h.ri_prev / len), -xab * (h.rj_prev / len)]
-            };
-            load.force = h.fn_prev;
         }
         if stale || self.multi.slots_stale {
             self.build_slots();
         }
+        // Every taking part pair's contact points and previous force, written straight into the
+        // slots of both particles, so that the kernel reads each particle's contacts as one slice;
+        // on the team (each member a range of pairs) when the kernel pass runs there.
+        let threaded = n >= 2 * MC_GRAIN && self.threads().is_some();
+        let team = self.blocks.team.as_ref().filter(|_| threaded);
+        let np = self.contacts.pairs.len();
+        let m = &mut self.multi;
+        m.slot_loads.resize(m.slot_start[n] as usize, ContactLoad { point: Vec3::zeros(), force: 0.0 });
+        let src = PairSrc {
+            p: &self.p,
+            mc_types: &m.mc_types,
+            domain,
+            pairs: &self.contacts.pairs,
+            hist: &self.contacts.pair_hist,
+            pair_mc: &m.pair_mc,
+            pair_slot: &m.pair_slot,
+        };
+        let loads = SplitMut::new(&mut m.slot_loads);
+        match team {
+            Some(team) => team.for_shares(np, |_, r| src.put_loads(r, &loads)),
+            None => src.put_loads(0..np, &loads),
+        }
+        for (c, &sl) in self.contacts.wc.iter().zip(&m.wall_slot) {
+            m.slot_loads[sl as usize] = ContactLoad { point: c.rel_prev, force: c.fn_prev };
+        }
         // The kernel particle by particle into one Δ per slot (threads on disjoint particle
         // ranges when they pay), then Δ to the pairs and wall contacts.
-        self.multi.slot_dr.resize(self.multi.slots.len(), 0.0);
-        let threaded = n >= 2 * MC_GRAIN && self.threads().is_some();
+        self.multi.slot_dr.resize(self.multi.slot_loads.len(), 0.0);
         let ctx = McCtx {
             p: &self.p,
             mc_types: &self.multi.mc_types,
             slot_start: &self.multi.slot_start,
-            slots: &self.multi.slots,
-            pair_loads: &self.multi.pair_loads,
-            wc: &self.contacts.wc,
+            loads: &self.multi.slot_loads,
             step: self.step,
         };
         let (tolerance, kept) = match self.multi.mc_cache.as_mut() {
@@ -206,21 +202,75 @@ impl World {
         if let Some(c) = self.multi.mc_cache.as_mut() {
             c.recomputed += counts.recomputed;
         }
-        for (s, &d) in self.multi.slots.iter().zip(&self.multi.slot_dr) {
-            match *s {
-                Slot::PairI(k) => self.contacts.pair_dr[k as usize][0] = d,
-                Slot::PairJ(k) => self.contacts.pair_dr[k as usize][1] = d,
-                Slot::Wall(k) => self.contacts.wc[k as usize].dr = d,
+        let m = &self.multi;
+        let (dr, pair_dr) = (&m.slot_dr, SplitMut::new(&mut self.contacts.pair_dr));
+        let scatter = |r: Range<usize>| {
+            // SAFETY: the members' shares are disjoint ranges of pairs.
+            let out = unsafe { pair_dr.range(r.clone()) };
+            for ((d, &t), ps) in out.iter_mut().zip(&m.pair_mc[r.clone()]).zip(&m.pair_slot[r]) {
+                *d = if t { [dr[ps[0] as usize], dr[ps[1] as usize]] } else { [0.0; 2] };
             }
+        };
+        match self.blocks.team.as_ref().filter(|_| threaded) {
+            Some(team) => team.for_shares(np, |_, r| scatter(r)),
+            None => scatter(0..np),
+        }
+        for (c, &sl) in self.contacts.wc.iter_mut().zip(&m.wall_slot) {
+            c.dr = dr[sl as usize];
         }
         Ok(())
     }
 }
 
+/// What the pairs' contact loads are computed from (shared between threads).
+struct PairSrc<'a> {
+    p: &'a Particles,
+    mc_types: &'a [McType],
+    domain: Domain,
+    pairs: &'a [Pair],
+    hist: &'a [PairHist],
+    pair_mc: &'a [bool],
+    pair_slot: &'a [[u32; 2]],
+}
+
+impl PairSrc<'_> {
+    /// The contact points and previous force of the taking part pairs in `r`, into their slots.
+    /// Contact points once per pair, both sides from one centre distance; as LIGGGHTS: the
+    /// midpoint of the modified spheres' surfaces along the centre line when loaded, else each
+    /// particle's own surface point.
+    fn put_loads(&self, r: Range<usize>, loads: &SplitMut<ContactLoad>) {
+        let p = self.p;
+        // The kernel's loaded threshold of particle a (LIGGGHTS switches the point on the same).
+        let eps = |a: usize| loaded_threshold(self.mc_types[p.typ[a]].material.youngs_modulus, p.radius[a]);
+        for k in r {
+            if !self.pair_mc[k] {
+                continue;
+            }
+            let (pr, h) = (&self.pairs[k], &self.hist[k]);
+            let (a, b) = (pr.i as usize, pr.j as usize);
+            let mut xab = p.x[b] - p.x[a];
+            self.domain.minimum_image(&mut xab);
+            let len = xab.norm().max(1e-300);
+            let points = if h.fn_prev > eps(a) {
+                let tmp = xab * ((h.ri_prev - h.rj_prev) * 0.5 / len);
+                [tmp + 0.5 * xab, tmp - 0.5 * xab]
+            } else {
+                [xab * (h.ri_prev / len), -xab * (h.rj_prev / len)]
+            };
+            for (&sl, point) in self.pair_slot[k].iter().zip(points) {
+                let sl = sl as usize;
+                // SAFETY: every pair end has a slot of its own (`build_slots`) and the members'
+                // pairs are disjoint, so no slot is written twice.
+                unsafe { loads.range(sl..sl + 1)[0] = ContactLoad { point, force: h.fn_prev } };
+            }
+        }
+    }
+}
+
 thread_local! {
-    /// One particle's contact loads and fallback flags: per thread, grown to the largest contact
-    /// set seen and reused (no allocation in the step loop).
-    static MC_SCRATCH: RefCell<(Vec<ContactLoad>, Vec<bool>)> = RefCell::default();
+    /// One particle's fallback flags: per thread, grown to the largest contact set seen and
+    /// reused (no allocation in the step loop).
+    static MC_SCRATCH: RefCell<Vec<bool>> = RefCell::default();
 }
 
 /// Read-only view of what the multi-contact kernel pass needs (shared between threads).
@@ -228,9 +278,8 @@ pub(super) struct McCtx<'a> {
     pub(super) p: &'a Particles,
     pub(super) mc_types: &'a [McType],
     pub(super) slot_start: &'a [u32],
-    pub(super) slots: &'a [Slot],
-    pub(super) pair_loads: &'a [PairLoad],
-    pub(super) wc: &'a [WallContact],
+    /// Per slot: contact point and previous force (see [`McState::slot_loads`]).
+    pub(super) loads: &'a [ContactLoad],
     pub(super) step: u64,
 }
 
@@ -286,7 +335,7 @@ impl McCtx<'_> {
         tolerance: f64,
     ) -> Result<McCounts, StepError> {
         MC_SCRATCH.with(|buf| {
-            let (loads, fb_buf) = &mut *buf.borrow_mut();
+            let fb_buf = &mut *buf.borrow_mut();
             let mut counts = McCounts::default();
             let mut kept = kept;
             let base = self.slot_start[lo] as usize;
@@ -297,24 +346,7 @@ impl McCtx<'_> {
                     out.fill(0.0);
                     continue;
                 }
-                loads.clear();
-                loads.extend(self.slots[s0..s1].iter().map(|s| {
-                    let (point, force) = match *s {
-                        Slot::PairI(k) => {
-                            let l = &self.pair_loads[k as usize];
-                            (l.points[0], l.force)
-                        }
-                        Slot::PairJ(k) => {
-                            let l = &self.pair_loads[k as usize];
-                            (l.points[1], l.force)
-                        }
-                        Slot::Wall(k) => {
-                            let c = &self.wc[k as usize];
-                            (c.rel_prev, c.fn_prev)
-                        }
-                    };
-                    ContactLoad { point, force }
-                }));
+                let loads = &self.loads[s0..s1];
                 let m = self.mc_types[self.p.typ[i]].material;
                 let params = McParams {
                     radius: self.p.radius[i],

@@ -533,6 +533,8 @@ impl Scratch {
     fn load<L: Lane>(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, unit_sources: bool) {
         let n = contacts.len();
         let len = n + LANES;
+        // Grown, never shrunk: only the padding past the contacts is zeroed here, every entry
+        // before it is written below (no clearing of whole arrays per call).
         for v in [
             &mut self.px,
             &mut self.py,
@@ -543,8 +545,10 @@ impl Scratch {
             &mut self.ny,
             &mut self.nz,
         ] {
-            v.clear();
-            v.resize(len, 0.0);
+            if v.len() < len {
+                v.resize(len, 0.0);
+            }
+            v[n..len].fill(0.0);
         }
         self.stride = len;
         self.up.clear();
@@ -555,7 +559,18 @@ impl Scratch {
         self.delta.resize(len, 0.0);
         self.peak.resize(len, 0.0);
         for (k, c) in contacts.iter().enumerate() {
-            let l = c.point.norm();
+            (self.px[k], self.py[k], self.pz[k]) = (c.point.x, c.point.y, c.point.z);
+        }
+        // |p| `L::WIDTH` contacts at a time, with the operations of `Vec3::norm` (x² + y² + z² in
+        // that order, then the square root): the same bits.
+        let mut k0 = 0;
+        while k0 < n {
+            let (x, y, z) = (L::load(&self.px[k0..]), L::load(&self.py[k0..]), L::load(&self.pz[k0..]));
+            (x * x + y * y + z * z).sqrt().store(&mut self.len[k0..]);
+            k0 += L::WIDTH;
+        }
+        for (k, c) in contacts.iter().enumerate() {
+            let l = self.len[k];
             // A point at the centre has no normal: zero normal and weight make the contact
             // neither exert nor receive a term (every term carries a normal or the weight).
             self.w[k] = if l > 0.0 && unit_sources {
@@ -565,7 +580,6 @@ impl Scratch {
             } else {
                 0.0
             };
-            (self.px[k], self.py[k], self.pz[k], self.len[k]) = (c.point.x, c.point.y, c.point.z, l);
         }
         let zero = L::splat(0.0);
         let mut k0 = 0;
