@@ -1,8 +1,10 @@
 //! The finite-element continuum reference of the single sphere in the rigid die
 //! (`validation/reference/continuum_die_*.csv`, made by `mcdem continuum`, see
 //! `validation/reference/README.md` and docs/continuum.md): the plate and side-wall stress of one
-//! elastic sphere (r = 1 mm, E = 23.3 kPa) in a rigid frictionless die of side 2r, Richardson
-//! extrapolated over three meshes, with error bars. Embedded, so `mcdem validate` needs no files.
+//! elastic sphere (r = 1 mm, E = 23.3 kPa) in a rigid frictionless die of side 2r: the finest
+//! mesh, with the spread to the two next-finest meshes as error bar (the mesh sequence is not
+//! monotone, so Richardson extrapolation does not apply). Embedded, so `mcdem validate` needs no
+//! files.
 //!
 //! The single-particle case measures Hertz, standard and advanced MC and the nonlocal kernels
 //! against it, next to the nonlocal reference: plate NRMSE, side NRMSE normalised by the side
@@ -123,7 +125,7 @@ impl Reference {
     pub fn markdown(&self, case_nu: f64, rows: &[(String, Errors)]) -> String {
         let mut md = format!(
             "\nAgainst the finite-element continuum (`validation/reference/{}`: {} ν = {}, the embedded curve closest to the case's ν = {case_nu}; \
-             frictionless rigid die, Richardson-extrapolated over three meshes (the file's header), Δ/r = {:.2} … {:.2}). \
+             frictionless rigid die, finest mesh with the spread to the two next-finest as error bar (the file's header), Δ/r = {:.2} … {:.2}). \
              Side NRMSE twice: over the side curve's own mean, and over the plate curve's mean (Fig. B.2's common axis):\n\n\
              | model | NRMSE plate | NRMSE side (side mean) | NRMSE side (plate mean) |\n|---|---|---|---|\n",
             self.file,

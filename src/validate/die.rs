@@ -387,7 +387,11 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
         ));
     }
     if die.case == "single_particle" {
-        continuum_section(&refs, &curves, &mut models, &mut rows, &mut md)?;
+        let statics = [
+            ("nonlocal_none (static Hertz)".to_string(), &hertz_qs),
+            (format!("nonlocal_boussinesq × {GAMMA_STANDARD} (standard MC's static fixed point)"), &mc_qs),
+        ];
+        continuum_section(&refs, &curves, &statics, &mut models, &mut rows, &mut md)?;
         let bous = refs.iter().find(|(k, _)| *k == KernelKind::Boussinesq).map(|(_, c)| c);
         if let Some(bous) = bous {
             let (met, text) = die_table_check(bous, &hertz_qs, die.side * die.side)?;
@@ -648,11 +652,13 @@ fn die_table_check(bous: &Curve, hertz: &Curve, area: f64) -> Result<(bool, Stri
 
 /// The single particle against the finite-element continuum (`super::continuum`): Hertz, standard
 /// and advanced MC (the frictionless Rust DEM at the paper's γ and MPR) and both nonlocal kernels,
-/// as a report table, per-model metrics (`nrmse_{plate,side,side_platemean}_continuum`), the
+/// with the static partners (kernel `none`, boussinesq × γ) that split a law's gap into the
+/// relation it solves and the DEM's evaluation of it, as a report table, per-model metrics (`nrmse_{plate,side,side_platemean}_continuum`), the
 /// curve's rows and a summary entry carrying the reference's own error bars.
 fn continuum_section(
     refs: &[(KernelKind, Curve)],
     curves: &[(&str, Curve)],
+    statics: &[(String, &Curve)],
     models: &mut Vec<ModelSummary>,
     rows: &mut Vec<Row>,
     md: &mut String,
@@ -662,7 +668,8 @@ fn continuum_section(
     let named = curves
         .iter()
         .map(|(n, c)| (n.to_string(), c))
-        .chain(refs.iter().map(|(k, c)| (format!("nonlocal_{}", k.name()), c)));
+        .chain(refs.iter().map(|(k, c)| (format!("nonlocal_{}", k.name()), c)))
+        .chain(statics.iter().map(|(n, c)| (n.clone(), *c)));
     for (name, c) in named {
         let e = cref.errors(c);
         if let Some(m) = models.iter_mut().find(|m| m.model == name) {
@@ -674,13 +681,13 @@ fn continuum_section(
     }
     md.push_str(&cref.markdown(NU_PARTICLE, &table));
     let name = cref.name();
-    push_curve(rows, "single_particle", &name, "fem_richardson_8_12_18", &cref.curve());
+    push_curve(rows, "single_particle", &name, "fem_finest_mesh", &cref.curve());
     for p in &cref.points {
         for (q, v) in [("plate_err_pa", p[2]), ("side_err_pa", p[4])] {
             rows.push(Row {
                 case: "single_particle",
                 model: name.clone(),
-                params: "fem_richardson_8_12_18".into(),
+                params: "fem_finest_mesh".into(),
                 x_name: "plate_disp_over_r".into(),
                 x: p[0],
                 quantity: q.into(),
