@@ -26,12 +26,20 @@ pub struct Reference {
 }
 
 /// The embedded curves: (law, ν, file name, text).
-const CURVES: &[(&str, f64, &str, &str)] = &[(
-    "neo_hookean",
-    0.49,
-    "continuum_die_neo_hookean_nu0.49.csv",
-    include_str!("../../validation/reference/continuum_die_neo_hookean_nu0.49.csv"),
-)];
+const CURVES: &[(&str, f64, &str, &str)] = &[
+    (
+        "neo_hookean",
+        0.49,
+        "continuum_die_neo_hookean_nu0.49.csv",
+        include_str!("../../validation/reference/continuum_die_neo_hookean_nu0.49.csv"),
+    ),
+    (
+        "neo_hookean",
+        0.499,
+        "continuum_die_neo_hookean_nu0.499.csv",
+        include_str!("../../validation/reference/continuum_die_neo_hookean_nu0.499.csv"),
+    ),
+];
 
 fn parse(text: &str, file: &str) -> Result<Vec<[f64; 5]>, String> {
     let mut lines = text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty());
