@@ -35,6 +35,8 @@ const MPR_ADVANCED: f64 = 0.11;
 const TARGET_NRMSE: f64 = 0.05;
 /// Friction of the paper's runs (Fig. B.1); the comparison with the frictionless reference uses 0.
 const MU_PAPER: f64 = 0.03;
+/// Poisson ratio of the hydrogel in the decks and the nonlocal scene (die_common.inc).
+const NU_PARTICLE: f64 = 0.5;
 /// Engine vs plugin on the same deck: both integrate the same equations with the same time step,
 /// so the curves agree to round-off; 1e-6 of the curve's scale leaves room for printed precision.
 const ENGINE_TOLERANCE: f64 = 1e-6;
@@ -82,7 +84,7 @@ fn bcc() -> Die {
 }
 
 /// A curve: (displacement / r, plate stress [Pa], side-wall stress [Pa]).
-type Curve = Vec<(f64, f64, f64)>;
+pub(super) type Curve = Vec<(f64, f64, f64)>;
 
 struct DemModel {
     name: &'static str,
@@ -385,6 +387,11 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
         ));
     }
     if die.case == "single_particle" {
+        let statics = [
+            ("nonlocal_none (static Hertz)".to_string(), &hertz_qs),
+            (format!("nonlocal_boussinesq × {GAMMA_STANDARD} (standard MC's static fixed point)"), &mc_qs),
+        ];
+        continuum_section(&refs, &curves, &statics, &mut models, &mut rows, &mut md)?;
         let bous = refs.iter().find(|(k, _)| *k == KernelKind::Boussinesq).map(|(_, c)| c);
         if let Some(bous) = bous {
             let (met, text) = die_table_check(bous, &hertz_qs, die.side * die.side)?;
@@ -441,6 +448,10 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     };
     for (k, c) in &refs {
         add(&format!("nonlocal {}", k.name()), c, true);
+    }
+    if die.case == "single_particle" {
+        let cref = super::continuum::closest(NU_PARTICLE)?;
+        add(&format!("FEM {} nu {}", cref.law, cref.nu), &cref.curve(), true);
     }
     for (name, c) in &curves {
         add(name, c, false);
@@ -637,4 +648,67 @@ fn die_table_check(bous: &Curve, hertz: &Curve, area: f64) -> Result<(bool, Stri
         );
     }
     Ok((ok, md))
+}
+
+/// The single particle against the finite-element continuum (`super::continuum`): Hertz, standard
+/// and advanced MC (the frictionless Rust DEM at the paper's γ and MPR) and both nonlocal kernels,
+/// with the static partners (kernel `none`, boussinesq × γ) that split a law's gap into the
+/// relation it solves and the DEM's evaluation of it, as a report table, per-model metrics (`nrmse_{plate,side,side_platemean}_continuum`), the
+/// curve's rows and a summary entry carrying the reference's own error bars.
+fn continuum_section(
+    refs: &[(KernelKind, Curve)],
+    curves: &[(&str, Curve)],
+    statics: &[(String, &Curve)],
+    models: &mut Vec<ModelSummary>,
+    rows: &mut Vec<Row>,
+    md: &mut String,
+) -> Result<(), String> {
+    let cref = super::continuum::closest(NU_PARTICLE)?;
+    let mut table = Vec::new();
+    let named = curves
+        .iter()
+        .map(|(n, c)| (n.to_string(), c))
+        .chain(refs.iter().map(|(k, c)| (format!("nonlocal_{}", k.name()), c)))
+        .chain(statics.iter().map(|(n, c)| (n.clone(), *c)));
+    for (name, c) in named {
+        let e = cref.errors(c);
+        if let Some(m) = models.iter_mut().find(|m| m.model == name) {
+            m.metrics.insert("nrmse_plate_continuum".into(), e.plate);
+            m.metrics.insert("nrmse_side_continuum".into(), e.side);
+            m.metrics.insert("nrmse_side_platemean_continuum".into(), e.side_plate_mean);
+        }
+        table.push((name, e));
+    }
+    md.push_str(&cref.markdown(NU_PARTICLE, &table));
+    let name = cref.name();
+    push_curve(rows, "single_particle", &name, "fem_finest_mesh", &cref.curve());
+    for p in &cref.points {
+        for (q, v) in [("plate_err_pa", p[2]), ("side_err_pa", p[4])] {
+            rows.push(Row {
+                case: "single_particle",
+                model: name.clone(),
+                params: "fem_finest_mesh".into(),
+                x_name: "plate_disp_over_r".into(),
+                x: p[0],
+                quantity: q.into(),
+                value: v,
+            });
+        }
+    }
+    let u = cref.own_uncertainty();
+    models.push(ModelSummary {
+        model: name,
+        nrmse: None,
+        wall_time_s: 0.0,
+        particle_steps_per_s: None,
+        metrics: [
+            ("nu".to_string(), cref.nu),
+            ("error_bar_plate".to_string(), u.plate),
+            ("error_bar_side".to_string(), u.side),
+            ("error_bar_side_platemean".to_string(), u.side_plate_mean),
+        ]
+        .into_iter()
+        .collect(),
+    });
+    Ok(())
 }

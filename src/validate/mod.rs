@@ -7,6 +7,7 @@
 //! - `report.md`: one section per case with its tables and notes.
 
 pub mod calibrate;
+pub mod continuum;
 pub mod die;
 pub mod hard_cases;
 pub mod packing;
