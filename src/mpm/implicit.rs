@@ -399,17 +399,28 @@ pub(super) fn solve<const D: usize>(
         })?;
             let mut alpha = 1.0;
             let mut gradient = false;
+            let mut inverted = false;
             loop {
                 ws.trial.clear();
                 ws.trial.extend(ws.u.iter().zip(&ws.du).map(|(u, du)| u + alpha * du));
                 match potential(pts, &body.law, opt.locking, ws, dt, true) {
                     Some((pi, _)) if pi <= pi0 - 1e-4 * alpha * slope.abs() + PI_ROUNDOFF * pi_scale => break,
-                    _ => alpha *= 0.5,
+                    Some(_) => alpha *= 0.5,
+                    None => {
+                        inverted = true;
+                        alpha *= 0.5
+                    }
                 }
                 if alpha < 1e-8 {
                     if gradient {
+                        let why = if inverted {
+                            "a material point inverts (J ≤ 0) along both"
+                        } else {
+                            "the incremental potential does not decrease along either"
+                        };
                         return Err(format!(
-                            "step {step}, Newton iteration {iter}: line search failed (no decrease of the incremental potential along the Newton increment nor along its gradient); reduce Δt"
+                            "step {step}, Newton iteration {iter}: line search failed: {why} the Newton increment and the gradient (|R| = {:.3e} against a force scale {fscale:.3e}); the deformation is beyond what this grid resolves: refine the grid or reduce Δt",
+                            r0.sqrt()
                         ));
                     }
                     // The Newton increment does not descend: far from the solution a strongly
