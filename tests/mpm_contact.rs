@@ -1,7 +1,6 @@
 //! Contact Dynamics between MPM bodies (Nezamabadi et al. 2019, Section 2.2): momentum exchange at
 //! common-lattice nodes, and scene validation.
 
-use mcdem::mpm::constitutive::{Constitutive, Law};
 use mcdem::mpm::contact::{step_bodies, ContactWorkspace};
 use mcdem::mpm::scene::Scene;
 
@@ -54,20 +53,7 @@ fn collide(dt: f64, h: f64) -> (f64, usize, f64, f64, f64) {
     let v = |s: &mcdem::mpm::scene::Setup<2>, b: usize| {
         s.bodies[b].points.momentum()[0] / s.bodies[b].points.mass.iter().sum::<f64>()
     };
-    let energy = |s: &mcdem::mpm::scene::Setup<2>| {
-        s.bodies
-            .iter()
-            .map(|b| {
-                b.points.kinetic_energy()
-                    + b.points
-                        .f
-                        .iter()
-                        .zip(&b.points.vol0)
-                        .map(|(f, v)| v * <Law as Constitutive<2>>::energy(&b.law, f).unwrap())
-                        .sum::<f64>()
-            })
-            .sum::<f64>()
-    };
+    let energy = |s: &mcdem::mpm::scene::Setup<2>| s.bodies.iter().map(|b| b.energy().unwrap()).sum::<f64>();
     let approach = v(&s, 0) - v(&s, 1);
     let e0 = energy(&s);
     let p_ref = s.bodies[0].points.momentum().norm();

@@ -34,6 +34,18 @@ pub struct Body<const D: usize> {
     pub law: Law,
 }
 
+impl<const D: usize> Body<D> {
+    /// Kinetic plus strain energy, Σ_p ½ m_p |v_p|² + V⁰_p W(F_p) (J, or J/m in 2-D), at the points'
+    /// own F (the energy the plain formulation conserves up to the backward-Euler loss).
+    pub fn energy(&self) -> Result<f64, super::constitutive::Inverted> {
+        let mut w = 0.0;
+        for (f, v) in self.points.f.iter().zip(&self.points.vol0) {
+            w += v * <Law as Constitutive<D>>::energy(&self.law, f)?;
+        }
+        Ok(self.points.kinetic_energy() + w)
+    }
+}
+
 /// A rigid frictionless plane x_axis = position, the body on the side `side` (+1: above/right,
 /// −1: below/left), moving along its normal at `velocity`.
 #[derive(Clone, Copy, Debug, PartialEq)]
