@@ -120,3 +120,29 @@ fn runaway_overlap_stops_with_particle_and_step() {
     let msg = e.to_string();
     assert!(msg.contains("particle 1") && msg.contains("step") && msg.contains("overlap"), "{msg}");
 }
+
+/// A state that is no longer finite (here a velocity set to NaN mid-run, as a broken force or fix
+/// would leave it) stops the step naming the particle, the step and the cause; it never runs on
+/// with NaN positions. Checked to fail: with the finiteness check removed from the kick, the run
+/// goes on and `step()` returns Ok with a NaN position.
+#[test]
+fn non_finite_state_stops_naming_the_particle() {
+    let mut w = World::new();
+    w.domain = Some(Domain::new(Vec3::repeat(-0.01), Vec3::repeat(0.01), [false; 3]));
+    w.set_materials(vec![Material::hertz(1e3, 0.3).unwrap()], &[1.0], &[0.0], Tangential::History).unwrap();
+    w.closure = Some(Closure::Hertz);
+    w.dt = 1e-6;
+    w.skin = 1e-3;
+    w.integrate = true;
+    w.p.push(1, 0, Vec3::new(-0.003, 0.0, 0.0), 0.002, 1000.0);
+    w.p.push(7, 0, Vec3::new(0.003, 0.0, 0.0), 0.002, 1000.0);
+    w.setup().unwrap();
+    for _ in 0..10 {
+        w.step().unwrap();
+    }
+    w.p.v[1] = Vec3::new(f64::NAN, 0.0, 0.0);
+    let e = w.step().expect_err("a NaN velocity must stop the step");
+    let msg = e.to_string();
+    assert!(msg.contains("particle 7") && msg.contains("not finite") && msg.contains("step"), "{msg}");
+    assert!(w.p.x[0].iter().all(|c| c.is_finite()), "the other particle stays finite");
+}

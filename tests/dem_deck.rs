@@ -383,3 +383,15 @@ fn custom_dump_frames_follow_the_interval_and_the_atom_count() {
         assert_eq!(frames(theirs.path()), want, "LIGGGHTS");
     }
 }
+
+/// A value that parses as a float but is not finite (`nan`, `inf`: Rust's parser takes both) is bad
+/// input, named with file and line, not a state that runs on as NaN. Checked to fail: with the
+/// finiteness test removed from the deck's number reader, `set ... vx nan` is accepted.
+#[test]
+fn non_finite_values_are_refused_with_file_and_line() {
+    for bad in ["nan", "inf", "-infinity"] {
+        let (ok, out) = run_deck(&format!("{BASE}set atom 1 vx {bad}\nrun 10\n"), &[]);
+        assert!(!ok, "{bad}: {out}");
+        assert!(out.contains("in.test:17") && out.contains("expected a finite number"), "{bad}: {out}");
+    }
+}

@@ -375,18 +375,6 @@ fn bad_decks_stop_with_one_error_line_naming_the_cause() {
     }
 }
 
-#[test]
-fn mpr_test_signed_runs() {
-    let tmp = TempDir::new().unwrap();
-    run_ok(
-        tmp.path(),
-        "bcc_box.in",
-        &[("mprtest", "signed"), ("steps", "500"), ("out", "s.txt"), ("dump", "s.dump")],
-    );
-    let rows = read_ave_time(&tmp.path().join("s.txt"));
-    assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
-}
-
 use mcdem::outputs::nrmse;
 
 #[test]

@@ -206,8 +206,14 @@ fn unsupported(what: &str) -> String {
     format!("unsupported {what}")
 }
 
+/// A finite number: Rust also parses "inf" and "NaN", which no deck value may be (a NaN would run
+/// on silently; LAMMPS's own infinite bounds, `INF`/`EDGE`, are read by the region code).
 fn num(s: &str) -> R<f64> {
-    s.parse::<f64>().map_err(|_| format!("expected a number, got \"{s}\""))
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(format!("expected a finite number, got \"{s}\"")),
+        Err(_) => Err(format!("expected a number, got \"{s}\"")),
+    }
 }
 
 fn int(s: &str) -> R<i64> {

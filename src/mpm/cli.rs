@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use super::compaction::{box_walls, CompactionLog};
+use super::compaction::{box_walls, wall_pair, CompactionLog};
 use super::constitutive::{inverse, Constitutive, Law, Mat};
 use super::contact::{step_bodies, ContactWorkspace};
 use super::grid::Vector;
@@ -57,12 +57,8 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
     let (lambda, mu) = setup.bodies[0].law.lame();
     let a = D - 1;
     // Plate pair along the last axis (bottom side +1, top side −1), if the scene has one.
-    let bottom = setup.walls.iter().position(|w| w.axis == a && w.side > 0.0);
-    let top = setup.walls.iter().position(|w| w.axis == a && w.side < 0.0);
-    let gap0 = match (bottom, top) {
-        (Some(b), Some(t)) => Some(setup.walls[t].position - setup.walls[b].position),
-        _ => None,
-    };
+    let plates = wall_pair(&setup.walls, a);
+    let gap0 = plates.map(|(b, t)| setup.walls[t].position - setup.walls[b].position);
     let mut csv = String::from(
         "step,time,d,F_top,F_bottom,F_mean,F_eq19,gamma_plates,gamma_mean,S_mean,newton_iterations,contact_iterations,contact_nodes,active_contacts,contact_normal_force,momentum_x,momentum_y,kinetic_energy\n",
     );
@@ -99,7 +95,7 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
         }
         let (gm, sm) = mean_strain_stress(&setup.bodies[0].points, &setup.bodies[0].law);
         let (mut d, mut ft, mut fb, mut gp) = (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
-        if let (Some(b), Some(t), Some(g0)) = (bottom, top, gap0) {
+        if let (Some((b, t)), Some(g0)) = (plates, gap0) {
             let gap = setup.walls[t].position - setup.walls[b].position;
             // Centre displacement: half the approach of the plates (Fig. 6, symmetric contacts).
             d = 0.5 * (g0 - gap);

@@ -9,14 +9,19 @@ use super::constitutive::{det, Mat};
 use super::contact::ContactReport;
 use super::implicit::{Body, Wall};
 
-/// The walls bounding a box: for each axis, the index of the wall on its low side (side +1) and on
-/// its high side (side −1). `None` unless every axis has both.
+/// The first pair of walls across `axis`: the index of the wall on its low side (side +1, the
+/// bodies above it) and of the one on its high side (side −1); `None` unless both exist.
+pub fn wall_pair(walls: &[Wall], axis: usize) -> Option<(usize, usize)> {
+    let lo = walls.iter().position(|w| w.axis == axis && w.side > 0.0)?;
+    let hi = walls.iter().position(|w| w.axis == axis && w.side < 0.0)?;
+    Some((lo, hi))
+}
+
+/// The walls bounding a box: a [`wall_pair`] across every axis, `None` unless every axis has one.
 pub fn box_walls<const D: usize>(walls: &[Wall]) -> Option<[(usize, usize); D]> {
     let mut out = [(0, 0); D];
     for (d, o) in out.iter_mut().enumerate() {
-        let lo = walls.iter().position(|w| w.axis == d && w.side > 0.0)?;
-        let hi = walls.iter().position(|w| w.axis == d && w.side < 0.0)?;
-        *o = (lo, hi);
+        *o = wall_pair(walls, d)?;
     }
     Some(out)
 }

@@ -38,7 +38,6 @@ struct Link<const D: usize> {
     n: Vector<D>,
     /// Body–body: the Coulomb coefficient; wall: the friction radius μ f_n (f_n of the last solve).
     friction: f64,
-    wall: bool,
     /// The local block W_cc and the update's stiffness 1/λ_max(W_cc) (0: the node cannot move).
     w: Mat<D>,
     k: f64,
@@ -102,7 +101,6 @@ impl<const D: usize> Delassus<D> {
                 b: (c.b, sb),
                 n: c.n,
                 friction: copt.body_friction,
-                wall: false,
                 w: Mat::<D>::zeros(),
                 k: 0.0,
                 r: c.r,
@@ -142,7 +140,6 @@ impl<const D: usize> Delassus<D> {
                     b: (b, s),
                     n,
                     friction,
-                    wall: true,
                     w: Mat::<D>::zeros(),
                     k: 0.0,
                     r,
@@ -182,13 +179,13 @@ impl<const D: usize> Delassus<D> {
             })?;
         for l in self.links.iter_mut() {
             let mut w = block(&self.comp[l.b.0], self.nodes[l.b.0].len(), l.b.1);
-            if let Some((a, s)) = l.a {
-                w += block(&self.comp[a], self.nodes[a].len(), s);
-            }
-            if l.wall {
-                // Only the tangential dofs carry the friction force.
-                let p = Mat::<D>::identity() - l.n * l.n.transpose();
-                w = p * w * p;
+            match l.a {
+                Some((a, s)) => w += block(&self.comp[a], self.nodes[a].len(), s),
+                None => {
+                    // A wall: only the tangential dofs carry the friction force.
+                    let p = Mat::<D>::identity() - l.n * l.n.transpose();
+                    w = p * w * p;
+                }
             }
             // Gershgorin bound of the largest eigenvalue: the update never overshoots.
             let lmax = (0..D).map(|i| (0..D).map(|j| w[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
@@ -210,7 +207,7 @@ impl<const D: usize> Delassus<D> {
                 if let Some((a, sa)) = l.a {
                     g -= Vector::<D>::from_fn(|d, _| self.u[a][sa * D + d]);
                 }
-                let new = if l.wall {
+                let new = if l.a.is_none() {
                     // The wall moves along its normal only: the tangential displacement is the slip.
                     let p = Mat::<D>::identity() - l.n * l.n.transpose();
                     project_disc(p * (l.r - g * l.k), l.friction)

@@ -392,7 +392,7 @@ pub(super) fn solve<const D: usize>(
             // potential Π(u) = |u − Δt v|²_M /(2Δt²) + Σ_p V_p⁰ W(F_p(u)) − f_ext·u, whose gradient is
             // −R. A full Newton increment of a large step can overshoot (or invert a point, where the
             // laws are undefined): halve it until Π decreases (Armijo).
-            let mut slope: f64 =
+            let slope: f64 =
                 (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.du[k] * ws.res[k]).sum();
             // The F-bar energy is not convex in u even where W(F) is (J̄/J couples the points of a
             // cell), so far from the solution K can be indefinite and the Newton increment point
@@ -403,7 +403,6 @@ pub(super) fn solve<const D: usize>(
                         ws.du[k] = -ws.du[k];
                     }
                 }
-                slope = -slope;
             }
             let (pi0, pi_scale) =
             potential(pts, &body.law, opt.locking, ws, dt, false).ok_or_else(|| {
@@ -444,15 +443,16 @@ pub(super) fn solve<const D: usize>(
                             "the incremental potential does not decrease along either"
                         };
                         return Err(format!(
-                            "step {step}, Newton iteration {iter}: line search failed: {why} the Newton increment and the gradient (|R| = {:.3e} against a force scale {fscale:.3e}); the deformation is beyond what this grid resolves: refine the grid or reduce Δt",
+                            "step {step}, Newton iteration {iter}: line search failed: {why} the Newton increment and the gradient (|R| = {:.3e} against a force scale {fscale:.3e}); refine the grid or reduce Δt",
                             r0.sqrt()
                         ));
                     }
                     // The Newton increment does not descend: far from the solution a strongly
-                    // compressed Neo-Hookean point makes K indefinite (W is polyconvex, not convex
-                    // in F). The mass-scaled gradient Δt² R/m always descends (−R is ∇Π, M > 0),
-                    // so this iteration takes it and Newton resumes from the better point
-                    // (measured: a 12-disc compaction stopped here at Φ = 0.71 before).
+                    // compressed Neo-Hookean point can make K indefinite (W is polyconvex, not
+                    // convex in F). The mass-scaled gradient Δt² R/m always descends (−R is ∇Π,
+                    // M > 0), so this iteration takes it and Newton resumes from the better point.
+                    // (The compaction stop at Φ = 0.71 that first led here was a stale residual,
+                    // cured by the projected search above; no scene is yet known to need this.)
                     for k in 0..ndof {
                         ws.du[k] = if ws.state[k] == DofState::Free && ws.mass_dof[k] > 0.0 {
                             ws.res[k] * dt * dt / ws.mass_dof[k]
@@ -467,7 +467,6 @@ pub(super) fn solve<const D: usize>(
                         let f = 0.1 * grid.h / big;
                         ws.du.iter_mut().for_each(|d| *d *= f);
                     }
-                    slope = (0..ndof).map(|k| ws.du[k] * ws.res[k]).sum();
                     gradient = true;
                     alpha = 1.0;
                 }

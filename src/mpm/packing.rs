@@ -64,14 +64,7 @@ impl PackingSpec {
             return Err(format!("packing: gap must be ≥ 0, got {}", self.gap));
         }
         let mut rng = SplitMix64(self.seed);
-        // Inverse CDF of p(d) ∝ d^−D on [d0, d1].
-        let e = 1.0 - dim as f64;
-        let mut diam: Vec<f64> = (0..self.count)
-            .map(|_| {
-                let u = rng.uniform();
-                (d0.powf(e) + u * (d1.powf(e) - d0.powf(e))).powf(1.0 / e)
-            })
-            .collect();
+        let mut diam: Vec<f64> = (0..self.count).map(|_| diameter(rng.uniform(), d0, d1, dim)).collect();
         diam.sort_by(|a, b| b.total_cmp(a));
         let mut placed: Vec<(Vec<f64>, f64)> = Vec::with_capacity(self.count);
         for (i, &d) in diam.iter().enumerate() {
@@ -107,35 +100,49 @@ impl PackingSpec {
     }
 }
 
+/// The diameter at quantile u ∈ [0, 1) of the number density p(d) ∝ d^−D on [d0, d1] (inverse
+/// of its distribution function), which gives every diameter class the same solid volume.
+fn diameter(u: f64, d0: f64, d1: f64, dim: usize) -> f64 {
+    let e = 1.0 - dim as f64;
+    (d0.powf(e) + u * (d1.powf(e) - d0.powf(e))).powf(1.0 / e)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Equal solid volume per diameter class: the area of discs with d below the middle of the
-    /// range is half the total, to sampling error (1000 discs: a few per cent).
+    /// Equal solid volume per diameter class: in 2-D (area ∝ d²) and 3-D (volume ∝ d³) the
+    /// discs with d in the lower half of the range hold half the solid, the lowest quarter a
+    /// quarter, to sampling error (20000 draws: under 1 %, asserted 2 %); the packing places them.
     #[test]
     fn diameters_are_uniform_by_volume_fraction() {
+        let (d0, d1) = (2e-3f64, 4e-3f64);
+        for dim in [2, 3] {
+            let mut rng = SplitMix64(7);
+            let (mut half, mut quarter, mut total) = (0.0, 0.0, 0.0);
+            for _ in 0..20000 {
+                let d = diameter(rng.uniform(), d0, d1, dim);
+                assert!((d0..=d1).contains(&d), "{d}");
+                let v = d.powi(dim as i32);
+                total += v;
+                if d < 3e-3 {
+                    half += v;
+                }
+                if d < 2.5e-3 {
+                    quarter += v;
+                }
+            }
+            assert!((half / total - 0.5).abs() < 0.02, "dim {dim}: {}", half / total);
+            assert!((quarter / total - 0.25).abs() < 0.02, "dim {dim}: {}", quarter / total);
+        }
         let p = PackingSpec {
             count: 1,
-            diameter: [2e-3, 4e-3],
+            diameter: [d0, d1],
             lo: vec![0.0, 0.0],
             hi: vec![1.0, 1.0],
             gap: 0.0,
             seed: 7,
         };
-        let mut rng = SplitMix64(p.seed);
-        let e = -1.0;
-        let (d0, d1) = (2e-3f64, 4e-3f64);
-        let (mut below, mut total) = (0.0, 0.0);
-        for _ in 0..20000 {
-            let u = rng.uniform();
-            let d = (d0.powf(e) + u * (d1.powf(e) - d0.powf(e))).powf(1.0 / e);
-            total += d * d;
-            if d < 3e-3 {
-                below += d * d;
-            }
-        }
-        assert!((below / total - 0.5).abs() < 0.02, "{}", below / total);
         assert_eq!(p.bodies(2).unwrap().len(), 1);
     }
 }

@@ -616,8 +616,8 @@ pub fn run_bcc(opts: &Options) -> Result<CaseResult, String> {
     run_die(bcc(), opts)
 }
 
-/// The docs/spec.md §4 die table (validation/reference/die_single_boussinesq.csv), computed by an
-/// independent script: the solver's boussinesq and `none` curves must reproduce it, P_v to 1e-3
+/// The docs/spec.md §4 die table (validation/reference/die_single_boussinesq.csv), derived by the
+/// independent script `die_single_boussinesq.py` beside it: the solver's boussinesq and `none` curves must reproduce it, P_v to 1e-3
 /// relative and P_h to its three printed digits (5e-3).
 const DIE_TABLE: &str = include_str!("../../validation/reference/die_single_boussinesq.csv");
 
