@@ -123,6 +123,7 @@ pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
             let item =
                 if opts.rounds > 1 { format!("{group} (round {})", round + 1) } else { group.to_string() };
             progress.start(&item);
+            let t = std::time::Instant::now();
             let done = match group {
                 "kernel" => {
                     kernel::rows(&opts, &mut report, say);
@@ -134,6 +135,11 @@ pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
                 _ => nonlocal::rows(&opts, &mut report, say),
             };
             progress.finish(&item);
+            // Groups differ by orders of magnitude in time: a later round's estimate of a group is
+            // this round's time of it, not the mean over groups.
+            if round + 1 < opts.rounds {
+                progress.expect(&format!("{group} (round {})", round + 2), t.elapsed().as_secs_f64());
+            }
             done?;
         }
         ratios(&mut report);

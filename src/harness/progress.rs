@@ -46,6 +46,10 @@ struct Running {
     expected: Option<f64>,
     /// (key, text) of what the item is on now, e.g. ("nu=0.45", "nu=0.45: hertz").
     details: Vec<(String, String)>,
+    /// The part of the item done, where the item can tell (e.g. fit evaluations made of planned),
+    /// and when and at which part it first told: its pace is measured from there, so that a setup
+    /// phase before the counted work does not count.
+    fraction: Option<(f64, Instant, f64)>,
 }
 
 #[derive(Default)]
@@ -67,14 +71,23 @@ struct State {
 impl State {
     /// The time left [s]: the remaining part of every running item and the whole of every item not
     /// yet started (its expected time, else the mean of the items done here), spread over as many
-    /// items as have run at once. `None` before there is anything to go by.
-    fn left(&self, now: Instant) -> Option<f64> {
+    /// items as have run at once; and whether a running item has run longer than its estimate
+    /// (the time left is then a lower bound). `None` before there is anything to go by.
+    fn left(&self, now: Instant) -> Option<(f64, bool)> {
         let ran = self.done - self.skipped.min(self.done);
         let mean = (ran > 0).then(|| self.done_secs / ran as f64);
         let mut work = 0.0;
+        let mut over = false;
         for r in &self.running {
             let t = now.duration_since(r.since).as_secs_f64();
-            work += (r.expected.or(mean)? - t).max(0.0);
+            // The item's own pace beats the mean of other items (they may differ).
+            let from_pace = r
+                .fraction
+                .filter(|(f, _, f1)| f > f1)
+                .map(|(f, t1, f1)| t + (1.0 - f).max(0.0) * now.duration_since(t1).as_secs_f64() / (f - f1));
+            let e = r.expected.or(from_pace).or(mean)?;
+            over |= t > e;
+            work += (e - t).max(0.0);
         }
         let waiting = self.total.saturating_sub(self.done + self.running.len());
         if waiting > 0 {
@@ -86,7 +99,7 @@ impl State {
                 work += rest as f64 * mean?;
             }
         }
-        Some(work / self.width.max(1) as f64)
+        Some((work / self.width.max(1) as f64, over))
     }
 
     /// The running items with their details, e.g. `uniaxial (nu=0.3: hertz; nu=0.5: start state)`.
@@ -114,7 +127,8 @@ impl State {
         }
         m += &format!("{elapsed:.0} s elapsed");
         match self.left(now) {
-            Some(l) => m += &format!(", about {l:.0} s left"),
+            Some((l, false)) => m += &format!(", about {l:.0} s left"),
+            Some((l, true)) => m += &format!(", at least {l:.0} s left (longer than estimated)"),
             None => m += ", time left not known yet",
         }
         m
@@ -188,6 +202,7 @@ impl Progress {
             since: Instant::now(),
             expected,
             details: Vec::new(),
+            fraction: None,
         });
         s.width = s.width.max(s.running.len());
     }
@@ -200,6 +215,18 @@ impl Progress {
             match r.details.iter_mut().find(|d| d.0 == key) {
                 Some(d) => d.1 = text,
                 None => r.details.push((key.to_string(), text)),
+            }
+        }
+    }
+
+    /// Item `name` is `fraction` (0..1) done: when no expected time is known, its time left is
+    /// estimated from its pace since its first such report.
+    pub fn fraction(&self, name: &str, fraction: f64) {
+        let mut s = self.shared.lock();
+        if let Some(r) = s.running.iter_mut().find(|r| r.name == name) {
+            if fraction.is_finite() {
+                let (t1, f1) = r.fraction.map_or((Instant::now(), fraction), |(_, t1, f1)| (t1, f1));
+                r.fraction = Some((fraction, t1, f1));
             }
         }
     }
@@ -322,13 +349,26 @@ mod tests {
         s.done = 2;
         s.done_secs = 20.0;
         s.width = 1;
-        s.running.push(Running { name: "c".into(), since: t0, expected: None, details: vec![] });
-        assert!((s.left(t0).unwrap() - 20.0).abs() < 1e-9);
+        s.running.push(Running {
+            name: "c".into(),
+            since: t0,
+            expected: None,
+            details: vec![],
+            fraction: None,
+        });
+        assert_eq!(s.left(t0), Some((20.0, false)));
         // The waiting item's previous time replaces the mean.
         s.expected.push(("d".into(), 100.0));
-        assert!((s.left(t0).unwrap() - 110.0).abs() < 1e-9);
+        assert_eq!(s.left(t0), Some((110.0, false)));
+        // A running item past its estimate: the rest is a lower bound.
+        let late = t0 + Duration::from_secs(30);
+        assert_eq!(s.left(late), Some((100.0, true)));
+        assert!(s.message(33.0, late).ends_with("at least 100 s left (longer than estimated)"));
         s.running[0].details.push(("nu=0.5".into(), "nu=0.5: hertz".into()));
         assert_eq!(s.running_names(), "c (nu=0.5: hertz)");
         assert!(s.message(3.0, t0).starts_with("running c (nu=0.5: hertz), 3 s elapsed, about 110 s left"));
+        // The item's own pace: from 0.25 at 10 s to 0.5 at 30 s, so 40 s to go.
+        s.running[0].fraction = Some((0.5, t0 + Duration::from_secs(10), 0.25));
+        assert_eq!(s.left(late), Some((140.0, false)));
     }
 }

@@ -73,15 +73,15 @@ fn calibrate_one(
     kind: KernelKind,
     dir: &Path,
     say: &(dyn Fn(&str) + Sync),
-    note: &dyn Fn(&str),
+    note: &dyn Fn(&str, Option<f64>),
 ) -> Result<Fit, String> {
     let t = Instant::now();
-    note("start state");
+    note("start state", None);
     let (dump, data) = uniaxial::start_state(nu, s, dir)?;
-    note("nonlocal reference");
+    note("nonlocal reference", None);
     let (refc, ref_secs) = uniaxial::reference(&dump, nu, kind, s.nonlocal_steps)?;
     say(&format!("ν = {nu}: nonlocal reference ({}) in {ref_secs:.1} s", kind.name()));
-    note("hertz");
+    note("hertz", None);
     let (hc, _) = uniaxial::compress(Law::HERTZ, nu, s, &data)?;
     let hertz_nrmse = uniaxial::error(&hc, &refc);
     let mut evals = 0;
@@ -97,7 +97,8 @@ fn calibrate_one(
         if failure.is_some() {
             return f64::INFINITY;
         }
-        note(&format!("eval {evals}/{planned}"));
+        // The evaluations done of those planned: the pace of this ν's estimate.
+        note(&format!("eval {evals}/{planned}"), Some((evals - 1) as f64 / planned as f64));
         let err =
             match uniaxial::compress(Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nu, s, &data) {
                 Ok((c, _)) => uniaxial::error(&c, &refc),
@@ -185,7 +186,12 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
     let fit = |nu: f64| {
         let name = format!("nu={nu}");
         progress.start(&name);
-        let note = |what: &str| progress.detail(&name, "eval", what.to_string());
+        let note = |what: &str, fraction: Option<f64>| {
+            progress.detail(&name, "eval", what.to_string());
+            if let Some(f) = fraction {
+                progress.fraction(&name, f);
+            }
+        };
         let r = calibrate_one(nu, &s, kind, &scratch.join(format!("nu{nu}")), &say, &note);
         progress.finish(&name);
         r
