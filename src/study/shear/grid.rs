@@ -247,10 +247,11 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
                         let Some(s) = todo.get(i) else { break };
-                        let key = s.key();
-                        progress.start(&key);
+                        // The grid coordinates, not the file key (which repeats the law and N).
+                        let name = format!("phi={:.3} mu={} nu={} g={:.1e}", s.phi, s.mu, s.nu, s.gamma_hat);
+                        progress.start(&name);
                         let r = pool.install(|| run_one(s, proto));
-                        progress.finish(&key);
+                        progress.finish(&name);
                         let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
                         mine.push(finish(s, r, k, total, &runs_dir, say_run));
                     }
