@@ -326,7 +326,7 @@ fn packing(seed: u64, out: Option<PathBuf>, describe: Option<PathBuf>) -> Result
 }
 
 fn validate(quick: bool, cases: Vec<String>, out: PathBuf) -> Result<(), String> {
-    let opts = mcdem::validate::Options { quick, out: out.clone() };
+    let opts = mcdem::validate::Options { quick, out: out.clone(), progress: None };
     let results = mcdem::validate::run(&opts, &cases)?;
     let failed: Vec<_> = results.iter().filter(|r| !r.passed).map(|r| r.name).collect();
     let targets: Vec<_> = results.iter().flat_map(|r| &r.targets).collect();

@@ -22,6 +22,8 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::harness::progress::Progress;
+
 /// One measurement.
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
@@ -107,26 +109,43 @@ pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
         return Err("ERROR: --rounds must be at least 1".into());
     }
     let mut rounds = Vec::with_capacity(opts.rounds);
+    // One progress item per scene group and round; the lines of `say` go above the bar.
+    let groups: Vec<&str> = SCENES.iter().copied().filter(|g| opts.runs(g)).collect();
+    let progress = Progress::new("bench", groups.len() * opts.rounds);
+    let mut say_above = |l: &str| progress.suspend(|| say(l));
+    let say: &mut dyn FnMut(&str) = &mut say_above;
     for round in 0..opts.rounds {
         if opts.rounds > 1 {
             say(&format!("round {} of {}", round + 1, opts.rounds));
         }
         let mut report = Report::default();
-        if opts.runs("kernel") {
-            kernel::rows(&opts, &mut report, say);
-        }
-        if opts.runs("packing") {
-            packing::rows(&opts, round, &mut report, say)?;
-        }
-        if opts.runs("hydrogel") {
-            hydrogel::rows(&opts, round, &mut report, say)?;
-        }
-        if opts.runs("nonlocal") {
-            nonlocal::rows(&opts, &mut report, say)?;
+        for &group in &groups {
+            let item =
+                if opts.rounds > 1 { format!("{group} (round {})", round + 1) } else { group.to_string() };
+            progress.start(&item);
+            let t = std::time::Instant::now();
+            let done = match group {
+                "kernel" => {
+                    kernel::rows(&opts, &mut report, say);
+                    Ok(())
+                }
+                "packing" => packing::rows(&opts, round, &mut report, say),
+                "hydrogel" => hydrogel::rows(&opts, round, &mut report, say),
+                // "nonlocal", the last of SCENES.
+                _ => nonlocal::rows(&opts, &mut report, say),
+            };
+            progress.finish(&item);
+            // Groups differ by orders of magnitude in time: a later round's estimate of a group is
+            // this round's time of it, not the mean over groups.
+            if round + 1 < opts.rounds {
+                progress.expect(&format!("{group} (round {})", round + 2), t.elapsed().as_secs_f64());
+            }
+            done?;
         }
         ratios(&mut report);
         rounds.push(report);
     }
+    drop(progress);
     let mut report = merge(rounds);
     report.targets = targets(&report);
     Ok(report)

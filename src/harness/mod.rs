@@ -1,10 +1,12 @@
 //! What the validation harness (`validate`), the benchmarks (`bench`) and the studies (`study`)
 //! share, so that none of the three imports another: running a deck in a scratch directory
-//! ([`runner`]), the report plots ([`plot`]), the recorded calibration of the hydrogel deck's laws
-//! ([`calibration`]) and the many-contact test particle ([`spread_contacts`]).
+//! ([`runner`]), the report plots ([`plot`]), the progress display of long commands ([`progress`]),
+//! the recorded calibration of the hydrogel deck's laws ([`calibration`]) and the many-contact test
+//! particle ([`spread_contacts`]).
 
 pub mod calibration;
 pub mod plot;
+pub mod progress;
 pub mod runner;
 
 use crate::physics::contact_set::ContactLoad;

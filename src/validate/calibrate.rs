@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use super::uniaxial::{self, Setup};
 use crate::harness::calibration::{Law, E_HYDROGEL};
+use crate::harness::progress::Progress;
 use crate::nonlocal::KernelKind;
 
 #[derive(Debug, Clone)]
@@ -72,23 +73,32 @@ fn calibrate_one(
     kind: KernelKind,
     dir: &Path,
     say: &(dyn Fn(&str) + Sync),
+    note: &dyn Fn(&str, Option<f64>),
 ) -> Result<Fit, String> {
     let t = Instant::now();
+    note("start state", None);
     let (dump, data) = uniaxial::start_state(nu, s, dir)?;
+    note("nonlocal reference", None);
     let (refc, ref_secs) = uniaxial::reference(&dump, nu, kind, s.nonlocal_steps)?;
     say(&format!("ν = {nu}: nonlocal reference ({}) in {ref_secs:.1} s", kind.name()));
+    note("hertz", None);
     let (hc, _) = uniaxial::compress(Law::HERTZ, nu, s, &data)?;
     let hertz_nrmse = uniaxial::error(&hc, &refc);
     let mut evals = 0;
+    let (gi, mi, ei) = if s.stroke < 30000 { (4, 3, 3) } else { (8, 6, 6) };
     // An unstable run (the engine stopped on an instability) counts as an infinite error; any
     // other failure (a deck or file problem) ends the calibration, so that it cannot pass for a
     // search result.
     let mut failure: Option<String> = None;
+    // Evaluations of the three line searches (two starting points, then one per reduction).
+    let planned = gi + mi + 4 + if nu > 0.3 + 1e-9 { ei + 2 } else { 0 };
     let mut eval = |gamma: f64, mpr: f64, e: f64| -> f64 {
         evals += 1;
         if failure.is_some() {
             return f64::INFINITY;
         }
+        // The evaluations done of those planned: the pace of this ν's estimate.
+        note(&format!("eval {evals}/{planned}"), Some((evals - 1) as f64 / planned as f64));
         let err =
             match uniaxial::compress(Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nu, s, &data) {
                 Ok((c, _)) => uniaxial::error(&c, &refc),
@@ -108,7 +118,6 @@ fn calibrate_one(
             f64::INFINITY
         }
     };
-    let (gi, mi, ei) = if s.stroke < 30000 { (4, 3, 3) } else { (8, 6, 6) };
     let mut mpr = 0.08;
     let (gamma, _) = golden(0.2, 2.0, gi, &mut |g| eval(g, mpr, E_HYDROGEL));
     let (m, mut best) = golden(0.02, 0.2, mi, &mut |m| eval(gamma, m, E_HYDROGEL));
@@ -167,27 +176,45 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
     let kind = s.kernel;
     let scratch = crate::harness::runner::Scratch::new()?;
     let scratch = &scratch.0;
-    let bar = indicatif::ProgressBar::new_spinner();
-    let lines = Mutex::new(());
-    let say = |l: &str| {
-        let _g = lines.lock();
-        // indicatif draws nothing when standard error is not a terminal (logs, CI): plain lines then.
-        if bar.is_hidden() {
-            eprintln!("{l}");
-        } else {
-            bar.println(l);
-        }
-        bar.tick();
-    };
     let t = Instant::now();
     let journal =
         opts.out.join(if opts.quick { "calibration_done_quick.jsonl" } else { "calibration_done.jsonl" });
-    let fit = |nu: f64| calibrate_one(nu, &s, kind, &scratch.join(format!("nu{nu}")), &say);
+    // One progress item per ν; a ν found in the journal counts as done.
+    let progress = Progress::new("calibrate", s.nus.len());
+    progress.skip(journal_fits(&s.nus, &journal).len());
+    let say = |l: &str| progress.println(l);
+    let fit = |nu: f64| {
+        let name = format!("nu={nu}");
+        progress.start(&name);
+        let note = |what: &str, fraction: Option<f64>| {
+            progress.detail(&name, "eval", what.to_string());
+            if let Some(f) = fraction {
+                progress.fraction(&name, f);
+            }
+        };
+        let r = calibrate_one(nu, &s, kind, &scratch.join(format!("nu{nu}")), &say, &note);
+        progress.finish(&name);
+        r
+    };
     let fits = fit_resumable(&s.nus, &journal, &fit, &say);
-    bar.finish_and_clear();
+    drop(progress);
     let fits = fits?;
     write_outputs(opts, &s, kind, &fits, t.elapsed().as_secs_f64())?;
     Ok(fits)
+}
+
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() < 1e-12
+}
+
+/// The fits of `journal` (one JSON line each) whose ν is one of `nus`.
+fn journal_fits(nus: &[f64], journal: &Path) -> Vec<Fit> {
+    std::fs::read_to_string(journal)
+        .unwrap_or_default()
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Fit>(l).ok())
+        .filter(|f| nus.iter().any(|&nu| same(nu, f.nu)))
+        .collect()
 }
 
 /// The resumable loop of [`run`]: fits every ν of `nus` with `fit` (two at a time, one per core)
@@ -200,13 +227,7 @@ pub fn fit_resumable(
     fit: &(dyn Fn(f64) -> Result<Fit, String> + Sync),
     say: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Fit>, String> {
-    let same = |a: f64, b: f64| (a - b).abs() < 1e-12;
-    let done: Vec<Fit> = std::fs::read_to_string(journal)
-        .unwrap_or_default()
-        .lines()
-        .filter_map(|l| serde_json::from_str::<Fit>(l).ok())
-        .filter(|f| nus.iter().any(|&nu| same(nu, f.nu)))
-        .collect();
+    let done = journal_fits(nus, journal);
     for f in &done {
         say(&format!(
             "ν = {}: taken from {} (γ = {:.4}, MPR = {:.4})",

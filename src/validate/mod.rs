@@ -12,13 +12,14 @@ pub mod die;
 pub mod hard_cases;
 pub mod packing;
 pub mod physics;
-pub mod progress;
 pub mod uniaxial;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::harness::plot;
+use crate::harness::progress::Progress;
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -108,6 +109,19 @@ pub struct Case {
 pub struct Options {
     pub quick: bool,
     pub out: PathBuf,
+    /// The progress display of the run, which a case may tell what it is on (set by [`run`]).
+    pub progress: Option<Arc<Progress>>,
+}
+
+/// The wall time [s] of `case` in the previous `summary.json` under `out`, if any and of the same
+/// mode: the expected time of the case in the progress display.
+fn previous_wall_time(out: &Path, case: &str, quick: bool) -> Option<f64> {
+    let text = std::fs::read_to_string(out.join("summary.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    if v["quick"].as_bool()? != quick {
+        return None;
+    }
+    v["cases"].as_array()?.iter().find(|c| c["name"] == case)?["wall_time_s"].as_f64()
 }
 
 /// Every case, in report order.
@@ -159,17 +173,23 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
     std::fs::create_dir_all(&opts.out).map_err(|e| format!("cannot create {}: {e}", opts.out.display()))?;
     let start = Instant::now();
     let mut results = Vec::new();
-    for case in all.iter().filter(|c| only.is_empty() || only.iter().any(|n| n == c.name)) {
-        eprintln!("validate: running {}", case.name);
+    let selected: Vec<&Case> =
+        all.iter().filter(|c| only.is_empty() || only.iter().any(|n| n == c.name)).collect();
+    let progress = Arc::new(Progress::new("validate", selected.len()));
+    for case in &selected {
+        if let Some(t) = previous_wall_time(&opts.out, case.name, opts.quick) {
+            progress.expect(case.name, t);
+        }
+    }
+    let case_opts = Options { progress: Some(progress.clone()), ..opts.clone() };
+    for case in selected {
+        progress.println(&format!("validate: running {}", case.name));
         let t = Instant::now();
-        let ticker = progress::Ticker::start(
-            case.name,
-            progress::previous_wall_time(&opts.out, case.name, opts.quick),
-        );
+        progress.start(case.name);
         // A case that cannot run (missing input, unstable model) is reported as failed with its
         // message; the other cases still run.
-        let mut r = (case.run)(opts).unwrap_or_else(|e| {
-            eprintln!("validate: {}: {e}", case.name);
+        let mut r = (case.run)(&case_opts).unwrap_or_else(|e| {
+            progress.println(&format!("validate: {}: {e}", case.name));
             CaseResult {
                 name: case.name,
                 title: "did not run".into(),
@@ -178,12 +198,15 @@ pub fn run(opts: &Options, only: &[String]) -> Result<Vec<CaseResult>, String> {
                 ..Default::default()
             }
         });
-        drop(ticker);
         r.wall_time_s = t.elapsed().as_secs_f64();
+        progress.finish(case.name);
         write_csv(&opts.out.join(format!("{}.csv", case.name)), &r.rows)?;
-        eprintln!("validate: {} {} in {:.1} s", case.name, r.status(), r.wall_time_s);
+        progress.println(&format!("validate: {} {} in {:.1} s", case.name, r.status(), r.wall_time_s));
         results.push(r);
     }
+    // The display ends (and its thread with it) before the report is written.
+    drop(case_opts);
+    drop(progress);
     let total = start.elapsed().as_secs_f64();
     let summary = serde_json::json!({
         "quick": opts.quick,

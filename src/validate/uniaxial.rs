@@ -270,8 +270,17 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         let mut r = NuResult::default();
         let (rows, models, targets, unstable, md) =
             (&mut r.rows, &mut r.models, &mut r.targets, &mut r.unstable, &mut r.md);
+        // What this ν is on, for the progress display (one line per model run, not per step).
+        let key = format!("nu={nu}");
+        let note = |what: &str| {
+            if let Some(p) = &opts.progress {
+                p.detail("uniaxial", &key, format!("{key}: {what}"));
+            }
+        };
         let dir = scratch.join(format!("nu{nu}"));
+        note("start state");
         let (dump, data) = start_state(nu, &s, &dir)?;
+        note("nonlocal reference");
         let (refc, ref_secs) = reference(&dump, nu, kind, s.nonlocal_steps)?;
         push_curve(rows, &format!("nonlocal_{}", kind.name()), format!("nu={nu}"), &refc);
         models.push(ModelSummary {
@@ -290,6 +299,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
                 metrics: Default::default(),
             })
         };
+        note("hertz");
         let (hc, hrun) = compress(Law::HERTZ, nu, &s, &data)?;
         let he = error(&hc, &refc);
         push_curve(rows, "hertz", format!("nu={nu}"), &hc);
@@ -297,6 +307,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         // Highest stable standard-MC γ of the ladder; every stable rung is a valid run.
         let mut best: Option<(f64, Curve, DeckRun)> = None;
         for g in GAMMA_LADDER {
+            note(&format!("standard_mc gamma={g}"));
             match compress(Law::standard(g), nu, &s, &data) {
                 Ok((c, r)) => best = Some((g, c, r)),
                 Err(e) if e.instability.is_some() => {
@@ -326,6 +337,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             if m.update_every > 1 {
                 params += &format!(" updateEvery={}", m.update_every);
             }
+            note(name);
             match compress(m, nu, &s, &data) {
                 Ok((c, run)) => {
                     let e = error(&c, &refc);
@@ -414,7 +426,17 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         let _ = writeln!(md, "\n![ν = {nu}]({file})\n");
         Ok(r)
     };
-    let results: Vec<Result<NuResult, String>> = s.nus.par_iter().map(|&nu| per_nu(nu)).collect();
+    let results: Vec<Result<NuResult, String>> = s
+        .nus
+        .par_iter()
+        .map(|&nu| {
+            let r = per_nu(nu);
+            if let Some(p) = &opts.progress {
+                p.detail_done("uniaxial", &format!("nu={nu}"));
+            }
+            r
+        })
+        .collect();
     let (mut targets, mut nrmse_rows, mut unstable) = (Vec::new(), Vec::new(), Vec::new());
     for r in results {
         let r = r?;

@@ -14,6 +14,7 @@ use super::protocol::{
 use super::report::write_outputs;
 use super::surface::{response_surface, SurfaceRow};
 use crate::harness::calibration::calibrated;
+use crate::harness::progress::Progress;
 
 /// The parameter grid of a study.
 #[derive(Debug, Clone)]
@@ -220,6 +221,10 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
         skipped,
         runs_dir.display()
     ));
+    // One progress item per grid run; the lines of `say` go above the bar.
+    let progress = Progress::new("study shear", total);
+    let say_above = |l: &str| progress.suspend(|| say(l));
+    let say_run: &(dyn Fn(&str) + Sync) = &say_above;
     // Longest first (slow shear rates), so the two threads finish together.
     todo.sort_by(|a, b| a.gamma_hat.total_cmp(&b.gamma_hat).then(b.phi.total_cmp(&a.phi)));
     // Exactly `threads` runs at a time: plain worker threads take the next run from a shared
@@ -242,9 +247,13 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
                         let Some(s) = todo.get(i) else { break };
+                        // The grid coordinates, not the file key (which repeats the law and N).
+                        let name = format!("phi={:.3} mu={} nu={} g={:.1e}", s.phi, s.mu, s.nu, s.gamma_hat);
+                        progress.start(&name);
                         let r = pool.install(|| run_one(s, proto));
+                        progress.finish(&name);
                         let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                        mine.push(finish(s, r, k, total, &runs_dir, say));
+                        mine.push(finish(s, r, k, total, &runs_dir, say_run));
                     }
                     mine
                 })
@@ -252,6 +261,7 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
             .collect();
         workers.into_iter().flat_map(|w| w.join().unwrap_or_default()).collect()
     });
+    drop(progress);
     let ran = outcomes.iter().filter(|o| o.is_ok()).count();
     for o in outcomes {
         match o {
