@@ -402,23 +402,9 @@ pub(super) fn solve<const D: usize>(
             // mass-scaled gradient Δt² R/((1 + s) m), which always descends. F-bar keeps its own
             // remedy below. A descending increment (every step of every scene but this kind) is
             // solved once, unshifted.
-            let free_slope = |ws: &Workspace<D>| -> f64 {
-                (0..ndof).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.du[k] * ws.res[k]).sum()
-            };
-            assemble_and_solve(pts, opt.locking, ws, dt, step, 0.0)?;
-            let mut slope = free_slope(ws);
-            let mut shift = 0.0;
-            while opt.locking == Locking::None && slope <= 0.0 {
-                shift = if shift == 0.0 { 1.0 / 64.0 } else { 4.0 * shift };
-                if shift > 1e12 {
-                    return Err(format!(
-                        "step {step}, Newton iteration {iter}: no descent direction even with the inertia raised 1e12 times (|R| = {:.3e})",
-                        r0.sqrt()
-                    ));
-                }
-                assemble_and_solve(pts, opt.locking, ws, dt, step, shift)?;
-                slope = free_slope(ws);
-            }
+            let (slope, shift) = descending_increment(pts, opt.locking, ws, dt, step).map_err(|e| {
+                format!("step {step}, Newton iteration {iter}: {e} (|R| = {:.3e})", r0.sqrt())
+            })?;
             // The F-bar energy is not convex in u even where W(F) is (J̄/J couples the points of a
             // cell), so far from the solution K can be indefinite and the Newton increment point
             // uphill (Δu·R < 0 while −R is the gradient of Π); its opposite then descends.
@@ -603,6 +589,34 @@ const PI_ROUNDOFF: f64 = 4.0 * f64::EPSILON;
 /// Relative size of the round-off of a sum of forces of magnitude `force_scale` (a few hundred
 /// ulps: the residual adds O(10) terms per dof, each with its own round-off).
 const ROUNDOFF: f64 = 1e-13;
+
+/// The Newton increment into `ws.du` with its slope Δu·R over the free dofs and the shift it took:
+/// the increment of M/Δt² + K when it descends (slope > 0) or under F-bar (which has its own
+/// remedy), otherwise that of (1 + s) M/Δt² + K with the smallest s of 1/64, 1/16, … that descends
+/// (see `solve` for why).
+fn descending_increment<const D: usize>(
+    pts: &Points<D>,
+    locking: Locking,
+    ws: &mut Workspace<D>,
+    dt: f64,
+    step: usize,
+) -> Result<(f64, f64), String> {
+    let free_slope = |ws: &Workspace<D>| -> f64 {
+        (0..ws.du.len()).filter(|&k| ws.state[k] == DofState::Free).map(|k| ws.du[k] * ws.res[k]).sum()
+    };
+    assemble_and_solve(pts, locking, ws, dt, step, 0.0)?;
+    let mut slope = free_slope(ws);
+    let mut shift = 0.0;
+    while locking == Locking::None && slope <= 0.0 {
+        shift = if shift == 0.0 { 1.0 / 64.0 } else { 4.0 * shift };
+        if shift > 1e12 {
+            return Err("no descent direction even with the inertia raised 1e12 times".into());
+        }
+        assemble_and_solve(pts, locking, ws, dt, step, shift)?;
+        slope = free_slope(ws);
+    }
+    Ok((slope, shift))
+}
 
 /// The largest force term of the residual (inertia, external, internal): the scale of its
 /// round-off.
@@ -970,98 +984,5 @@ fn update_points<const D: usize>(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mpm::constitutive::NeoHookean;
-
-    /// A 3×2-cell block, 2×2 points per cell, prepared as `step` does (no walls, free dofs).
-    fn prepared(locking: Locking) -> (Points<2>, Workspace<2>) {
-        let grid = Grid::new(Vector::<2>::new(-1.0, -1.0), 1.0, [5, 4]).unwrap();
-        let pts =
-            Points::seed(Vector::<2>::zeros(), Vector::<2>::new(3.0, 2.0), grid.origin, 1.0, 2, 1.0, |_| {
-                true
-            });
-        let mut ws = Workspace::<2> {
-            stencils: pts.x.iter().map(|x| grid.stencil(x).unwrap()).collect(),
-            ..Default::default()
-        };
-        let nn = grid.n_nodes();
-        ws.node_mass = vec![0.0; nn];
-        for (p, st) in ws.stencils.iter().enumerate() {
-            for c in 0..4 {
-                ws.node_mass[st.nodes[c]] += st.n[c] * pts.mass[p];
-            }
-        }
-        ws.dof_of = vec![usize::MAX; nn];
-        for i in 0..nn {
-            if ws.node_mass[i] > 0.0 {
-                ws.dof_of[i] = ws.active.len();
-                ws.active.push(i);
-            }
-        }
-        let ndof = ws.active.len() * 2;
-        for v in [&mut ws.v_old, &mut ws.u, &mut ws.du, &mut ws.res, &mut ws.fext, &mut ws.mass_dof] {
-            *v = vec![0.0; ndof];
-        }
-        for k in 0..ndof {
-            ws.mass_dof[k] = ws.node_mass[ws.active[k / 2]];
-            // A finite, non-homogeneous displacement (stretch, shear and a wave, |u| ≤ 0.15 h).
-            let x = grid.node_position(ws.active[k / 2]);
-            ws.u[k] = 0.1 * (1.3 * x[0] + 0.7 * x[1] + k as f64).sin() + 0.05 * x[k % 2];
-        }
-        ws.state = vec![DofState::Free; ndof];
-        ws.pk1 = vec![Mat::<2>::zeros(); pts.len()];
-        ws.tangent = vec![crate::mpm::constitutive::zero_tangent::<2>(); pts.len()];
-        if locking == Locking::FBar {
-            ws.fbar.group(&ws.stencils);
-        }
-        (pts, ws)
-    }
-
-    /// The residual is −∂Π/∂u and the assembled matrix is −∂R/∂u, checked by central differences
-    /// (step 1e-6: truncation ~1e-12, round-off ~1e-10 of the terms, λ/μ = 100).
-    #[test]
-    fn residual_and_stiffness_are_derivatives_of_the_potential() {
-        let law = Law::NeoHookean(NeoHookean::new(100.0, 1.0).unwrap());
-        for locking in [Locking::None, Locking::FBar] {
-            let (pts, mut ws) = prepared(locking);
-            let ndof = ws.u.len();
-            let dt = 1.0;
-            evaluate(&pts, &law, locking, &mut ws, dt, 0, 0).unwrap();
-            let r0 = ws.res.clone();
-            assemble_and_solve(&pts, locking, &mut ws, dt, 0, 0.0).unwrap();
-            let mut k = vec![vec![0.0; ndof]; ndof];
-            for t in &ws.trip {
-                k[t.row][t.col] += t.val;
-            }
-            let eps = 1e-6;
-            let u0 = ws.u.clone();
-            let (mut err_r, mut err_k, mut scale_r, mut scale_k): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
-            for j in 0..ndof {
-                let side = |sgn: f64, ws: &mut Workspace<2>| {
-                    ws.u = u0.clone();
-                    ws.u[j] += sgn * eps;
-                    ws.trial = ws.u.clone();
-                    let pi = potential(&pts, &law, locking, ws, dt, false).unwrap().0;
-                    evaluate(&pts, &law, locking, ws, dt, 0, 0).unwrap();
-                    (pi, ws.res.clone())
-                };
-                let (pp, rp) = side(1.0, &mut ws);
-                let (pm, rm) = side(-1.0, &mut ws);
-                err_r = err_r.max(((pp - pm) / (2.0 * eps) + r0[j]).abs());
-                scale_r = scale_r.max(r0[j].abs());
-                for i in 0..ndof {
-                    let fd = -(rp[i] - rm[i]) / (2.0 * eps);
-                    err_k = err_k.max((fd - k[i][j]).abs());
-                    scale_k = scale_k.max(k[i][j].abs());
-                }
-            }
-            eprintln!(
-                "{locking:?}: residual {:.2e}, stiffness {:.2e} (relative)",
-                err_r / scale_r,
-                err_k / scale_k
-            );
-            assert!(err_r < 1e-6 * scale_r && err_k < 1e-6 * scale_k, "{locking:?}");
-        }
-    }
-}
+#[path = "implicit_tests.rs"]
+mod tests;
