@@ -94,9 +94,9 @@ fn too_large_time_step_stops_with_particle_and_step() {
     assert!(e.contains("Rayleigh") && e.contains("particle"), "{e}");
 }
 
-#[test]
-fn runaway_overlap_stops_with_particle_and_step() {
-    // Two spheres driven into each other far faster than the contact can resist.
+/// Two Hertz spheres of diameter 2 mm, ids `ids`, centres at ∓`half_gap` on x, in a closed box,
+/// integrating at Δt = 1 µs.
+fn two_spheres(ids: [i64; 2], half_gap: f64) -> World {
     let mut w = World::new();
     w.domain = Some(Domain::new(Vec3::repeat(-0.01), Vec3::repeat(0.01), [false; 3]));
     w.set_materials(vec![Material::hertz(1e3, 0.3).unwrap()], &[1.0], &[0.0], Tangential::History).unwrap();
@@ -104,8 +104,15 @@ fn runaway_overlap_stops_with_particle_and_step() {
     w.dt = 1e-6;
     w.skin = 1e-3;
     w.integrate = true;
-    w.p.push(1, 0, Vec3::new(-0.0012, 0.0, 0.0), 0.002, 1000.0);
-    w.p.push(2, 0, Vec3::new(0.0012, 0.0, 0.0), 0.002, 1000.0);
+    w.p.push(ids[0], 0, Vec3::new(-half_gap, 0.0, 0.0), 0.002, 1000.0);
+    w.p.push(ids[1], 0, Vec3::new(half_gap, 0.0, 0.0), 0.002, 1000.0);
+    w
+}
+
+#[test]
+fn runaway_overlap_stops_with_particle_and_step() {
+    // Two spheres driven into each other far faster than the contact can resist.
+    let mut w = two_spheres([1, 2], 0.0012);
     w.p.v[0] = Vec3::new(50.0, 0.0, 0.0);
     w.p.v[1] = Vec3::new(-50.0, 0.0, 0.0);
     w.setup().unwrap();
@@ -127,15 +134,7 @@ fn runaway_overlap_stops_with_particle_and_step() {
 /// goes on and `step()` returns Ok with a NaN position.
 #[test]
 fn non_finite_state_stops_naming_the_particle() {
-    let mut w = World::new();
-    w.domain = Some(Domain::new(Vec3::repeat(-0.01), Vec3::repeat(0.01), [false; 3]));
-    w.set_materials(vec![Material::hertz(1e3, 0.3).unwrap()], &[1.0], &[0.0], Tangential::History).unwrap();
-    w.closure = Some(Closure::Hertz);
-    w.dt = 1e-6;
-    w.skin = 1e-3;
-    w.integrate = true;
-    w.p.push(1, 0, Vec3::new(-0.003, 0.0, 0.0), 0.002, 1000.0);
-    w.p.push(7, 0, Vec3::new(0.003, 0.0, 0.0), 0.002, 1000.0);
+    let mut w = two_spheres([1, 7], 0.003);
     w.setup().unwrap();
     for _ in 0..10 {
         w.step().unwrap();
