@@ -166,7 +166,7 @@ impl<const D: usize> Delassus<D> {
                     comp.clear();
                     return Ok(());
                 }
-                factorize(&body.points, opt.locking, w, opt.dt, step)?;
+                factorize(&body.points, opt.locking, w, opt.dt, step, 0.0)?;
                 let mut dofs = Vec::with_capacity(nodes.len() * D);
                 for &a in nodes {
                     for d in 0..D {

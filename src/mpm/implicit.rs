@@ -399,22 +399,12 @@ pub(super) fn solve<const D: usize>(
             // 1.9 N/m, Δu·R < 0 for 35 iterations at α = 1/32 and |R| stuck near 2 N/m until the
             // iteration limit). Modified Newton: the inertia diagonal is raised, (1 + s) M/Δt² with
             // s = 1/64, 1/16, …, until the increment descends; as s grows the increment turns into the
-            // mass-scaled gradient Δt² R/((1 + s) m), which always descends. F-bar keeps its own
-            // remedy below. A descending increment (every step of every scene but this kind) is
+            // mass-scaled gradient Δt² R/((1 + s) m), which always descends. F-bar has its own
+            // remedy (see `descending_increment`). A descending increment (every step of every scene but this kind) is
             // solved once, unshifted.
             let (slope, shift) = descending_increment(pts, opt.locking, ws, dt, step).map_err(|e| {
                 format!("step {step}, Newton iteration {iter}: {e} (|R| = {:.3e})", r0.sqrt())
             })?;
-            // The F-bar energy is not convex in u even where W(F) is (J̄/J couples the points of a
-            // cell), so far from the solution K can be indefinite and the Newton increment point
-            // uphill (Δu·R < 0 while −R is the gradient of Π); its opposite then descends.
-            if opt.locking == Locking::FBar && slope < 0.0 {
-                for k in 0..ndof {
-                    if ws.state[k] == DofState::Free {
-                        ws.du[k] = -ws.du[k];
-                    }
-                }
-            }
             let (pi0, pi_scale) =
             potential(pts, &body.law, opt.locking, ws, dt, false).ok_or_else(|| {
             format!("step {step}, Newton iteration {iter}: a material point is inverted (J ≤ 0) after the wall projection; reduce Δt or refine the grid")
@@ -458,12 +448,12 @@ pub(super) fn solve<const D: usize>(
                             r0.sqrt()
                         ));
                     }
-                    // The Newton increment does not descend: far from the solution a strongly
-                    // compressed Neo-Hookean point can make K indefinite (W is polyconvex, not
-                    // convex in F). The mass-scaled gradient Δt² R/m always descends (−R is ∇Π,
-                    // M > 0), so this iteration takes it and Newton resumes from the better point.
-                    // (The compaction stop at Φ = 0.71 that first led here was a stale residual,
-                    // cured by the projected search above; no scene is yet known to need this.)
+                    // The increment descends at α = 0 (`descending_increment`) yet no halving
+                    // decreases Π: points invert along it, or the decrease is below round-off.
+                    // The mass-scaled gradient Δt² R/m always descends (−R is ∇Π, M > 0), so this
+                    // iteration takes it and Newton resumes from the better point. (The compaction
+                    // stop at Φ = 0.71 that first led here was a stale residual, cured by the
+                    // projected search above; no scene is yet known to need this.)
                     for k in 0..ndof {
                         ws.du[k] = if ws.state[k] == DofState::Free && ws.mass_dof[k] > 0.0 {
                             ws.res[k] * dt * dt / ws.mass_dof[k]
@@ -591,9 +581,9 @@ const PI_ROUNDOFF: f64 = 4.0 * f64::EPSILON;
 const ROUNDOFF: f64 = 1e-13;
 
 /// The Newton increment into `ws.du` with its slope Δu·R over the free dofs and the shift it took:
-/// the increment of M/Δt² + K when it descends (slope > 0) or under F-bar (which has its own
-/// remedy), otherwise that of (1 + s) M/Δt² + K with the smallest s of 1/64, 1/16, … that descends
-/// (see `solve` for why).
+/// the increment of M/Δt² + K when it descends (slope > 0); otherwise, under F-bar, its opposite,
+/// and without, that of (1 + s) M/Δt² + K with the smallest s of 1/64, 1/16, … that descends (see
+/// `solve` for why).
 fn descending_increment<const D: usize>(
     pts: &Points<D>,
     locking: Locking,
@@ -606,6 +596,17 @@ fn descending_increment<const D: usize>(
     };
     assemble_and_solve(pts, locking, ws, dt, step, 0.0)?;
     let mut slope = free_slope(ws);
+    // The F-bar energy is not convex in u even where W(F) is (J̄/J couples the points of a cell),
+    // so far from the solution K can be indefinite and the increment point uphill (Δu·R < 0 while
+    // −R is the gradient of Π); its opposite then descends.
+    if locking == Locking::FBar && slope < 0.0 {
+        for k in 0..ws.du.len() {
+            if ws.state[k] == DofState::Free {
+                ws.du[k] = -ws.du[k];
+            }
+        }
+        slope = -slope;
+    }
     let mut shift = 0.0;
     while locking == Locking::None && slope <= 0.0 {
         shift = if shift == 0.0 { 1.0 / 64.0 } else { 4.0 * shift };
@@ -809,7 +810,8 @@ fn internal_force_scale<const D: usize>(pts: &Points<D>, law: &Law, ws: &Workspa
 }
 
 /// Builds K = M/Δt² + Σ_p V_p⁰ G·A·G (Eq. A.3) with the bound dofs' rows replaced by identity, and
-/// solves K Δu = R (Eq. 15); bound dofs get Δu = their target − u.
+/// solves K Δu = R (Eq. 15); bound dofs get Δu = their target − u. `shift` raises the inertia
+/// term as in [`factorize`].
 fn assemble_and_solve<const D: usize>(
     pts: &Points<D>,
     locking: Locking,
@@ -818,7 +820,7 @@ fn assemble_and_solve<const D: usize>(
     step: usize,
     shift: f64,
 ) -> Result<(), String> {
-    factorize_shifted(pts, locking, ws, dt, step, shift)?;
+    factorize(pts, locking, ws, dt, step, shift)?;
     let ndof = ws.res.len();
     let lu = ws.lu.as_ref().expect("factorized above");
     let mut rhs = FMat::<f64>::from_fn(ndof, 1, |r, _| match ws.state[r] {
@@ -864,21 +866,10 @@ pub(super) fn compliance<const D: usize>(ws: &Workspace<D>, dofs: &[usize], out:
     }
 }
 
-/// Assembles the Newton matrix M/Δt² + K at the current state (identity rows for bound and
-/// prescribed dofs) and keeps its sparse LU factorization in `ws.lu`.
+/// Assembles the Newton matrix (1 + shift) M/Δt² + K at the current state (identity rows for bound
+/// and prescribed dofs) and keeps its sparse LU factorization in `ws.lu`. Shift 0 is the tangent
+/// itself; a positive shift is the modified Newton matrix of `descending_increment`.
 pub(super) fn factorize<const D: usize>(
-    pts: &Points<D>,
-    locking: Locking,
-    ws: &mut Workspace<D>,
-    dt: f64,
-    step: usize,
-) -> Result<(), String> {
-    factorize_shifted(pts, locking, ws, dt, step, 0.0)
-}
-
-/// `factorize` with the inertia diagonal raised to (1 + shift) M/Δt²: the modified Newton matrix
-/// of `solve` when the tangent is indefinite (shift 0 is the tangent itself).
-fn factorize_shifted<const D: usize>(
     pts: &Points<D>,
     locking: Locking,
     ws: &mut Workspace<D>,
