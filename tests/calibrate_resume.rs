@@ -90,3 +90,81 @@ fn a_resumed_calibration_equals_an_uninterrupted_one() {
         assert_eq!(bits(a), bits(b), "ν = {}: {a:?} vs {b:?}", a.nu);
     }
 }
+
+// ---- The same through the binary -------------------------------------------------------------
+//
+// A real fit takes minutes, so these runs give `mcdem calibrate` a journal that already holds every
+// requested ν: it must then fit nothing (the journal is not appended to) and write its outputs from
+// the journal's values, bit for bit. If the binary ignored its journal it would start the 514-particle
+// fits; the 120 s timeout (a fit takes minutes, reading a journal milliseconds) turns that into a
+// failure instead of a slow pass.
+
+use assert_cmd::Command;
+
+fn journal_line(f: &Fit) -> String {
+    serde_json::to_string(f).unwrap() + "\n"
+}
+
+fn calibrate(dir: &Path, nus: &str) -> assert_cmd::assert::Assert {
+    Command::cargo_bin("mcdem")
+        .unwrap()
+        .args(["calibrate", "--quick", "--nu", nus, "--out"])
+        .arg(dir)
+        .env("MCDEM_PROGRESS_INTERVAL", "1")
+        .timeout(std::time::Duration::from_secs(120))
+        .assert()
+}
+
+fn outputs(dir: &Path) -> Vec<Fit> {
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("calibration.json")).unwrap()).unwrap();
+    serde_json::from_value(json["fits"].clone()).unwrap()
+}
+
+#[test]
+fn the_binary_resumes_from_its_journal_without_fitting_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("calibration_done_quick.jsonl");
+    // ν = 0.4 is journaled but not asked for: it must not appear in the outputs.
+    let text: String = [0.5, 0.4, 0.3].iter().map(|&nu| journal_line(&stand_in(nu))).collect();
+    std::fs::write(&journal, &text).unwrap();
+    let out = calibrate(dir.path(), "0.3,0.5").success();
+    let stdout = String::from_utf8_lossy(&out.get_output().stdout).to_string();
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert_eq!((stdout.clone() + &stderr).matches("taken from").count(), 2, "{stdout}{stderr}");
+    assert_eq!(std::fs::read_to_string(&journal).unwrap(), text, "nothing was fitted, so nothing appended");
+    let fits = outputs(dir.path());
+    assert_eq!(fits.iter().map(|f| f.nu).collect::<Vec<_>>(), [0.3, 0.5]);
+    for f in &fits {
+        assert_eq!(bits(f), bits(&stand_in(f.nu)), "ν = {}", f.nu);
+    }
+    let csv = std::fs::read_to_string(dir.path().join("calibration.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "header and two ν:\n{csv}");
+    assert!(dir.path().join("calibration.md").exists() && dir.path().join("calibration.png").exists());
+}
+
+#[test]
+fn a_damaged_journal_line_is_an_error_naming_the_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("calibration_done_quick.jsonl");
+    std::fs::write(&journal, journal_line(&stand_in(0.5)) + "{\"nu\": 0.3, \"gamma\": oops}\n").unwrap();
+    let out = calibrate(dir.path(), "0.5").failure();
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(stderr.contains("calibration_done_quick.jsonl:2: not a calibration fit"), "{stderr}");
+    assert!(!dir.path().join("calibration.json").exists());
+}
+
+#[test]
+fn a_torn_last_line_from_a_killed_run_is_dropped_and_the_rest_resumed() {
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("calibration_done_quick.jsonl");
+    let whole = journal_line(&stand_in(0.5));
+    let torn = &journal_line(&stand_in(0.3))[..40];
+    std::fs::write(&journal, whole.clone() + torn).unwrap();
+    let out = calibrate(dir.path(), "0.5").success();
+    let all = String::from_utf8_lossy(&out.get_output().stdout).to_string()
+        + &String::from_utf8_lossy(&out.get_output().stderr);
+    assert!(all.contains("calibration_done_quick.jsonl:2: an unfinished last line"), "{all}");
+    assert_eq!(std::fs::read_to_string(&journal).unwrap(), whole, "the torn line is cut, the fit kept");
+    assert_eq!(bits(&outputs(dir.path())[0]), bits(&stand_in(0.5)));
+}

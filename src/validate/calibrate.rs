@@ -181,8 +181,8 @@ pub fn run(opts: &Options) -> Result<Vec<Fit>, String> {
         opts.out.join(if opts.quick { "calibration_done_quick.jsonl" } else { "calibration_done.jsonl" });
     // One progress item per ν; a ν found in the journal counts as done.
     let progress = Progress::new("calibrate", s.nus.len());
-    progress.skip(journal_fits(&s.nus, &journal).len());
     let say = |l: &str| progress.println(l);
+    progress.skip(journal_fits(&s.nus, &journal, &say)?.len());
     let fit = |nu: f64| {
         let name = format!("nu={nu}");
         progress.start(&name);
@@ -207,14 +207,49 @@ fn same(a: f64, b: f64) -> bool {
     (a - b).abs() < 1e-12
 }
 
-/// The fits of `journal` (one JSON line each) whose ν is one of `nus`.
-fn journal_fits(nus: &[f64], journal: &Path) -> Vec<Fit> {
-    std::fs::read_to_string(journal)
-        .unwrap_or_default()
-        .lines()
-        .filter_map(|l| serde_json::from_str::<Fit>(l).ok())
-        .filter(|f| nus.iter().any(|&nu| same(nu, f.nu)))
-        .collect()
+/// The fits of `journal` (one JSON line each) whose ν is one of `nus`; no journal is no fit.
+///
+/// A line that is not a fit is an error naming the file and line: silently refitting would hide
+/// a damaged journal and cost hours. The one exception is a last line without its newline, the
+/// trace of a run killed while appending: it is cut from the file (so the next append starts on
+/// a fresh line) and that ν is fitted again.
+fn journal_fits(nus: &[f64], journal: &Path, say: &dyn Fn(&str)) -> Result<Vec<Fit>, String> {
+    let text = match std::fs::read_to_string(journal) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(format!("cannot read {}: {e}", journal.display())),
+    };
+    let whole = text.rfind('\n').map_or(0, |i| i + 1);
+    if whole < text.len() {
+        let torn = &text[whole..];
+        if serde_json::from_str::<Fit>(torn).is_err() {
+            say(&format!(
+                "{}:{}: an unfinished last line (a run stopped while writing it) is dropped",
+                journal.display(),
+                text[..whole].lines().count() + 1
+            ));
+            std::fs::write(journal, &text[..whole])
+                .map_err(|e| format!("cannot write {}: {e}", journal.display()))?;
+            return journal_fits(nus, journal, say);
+        }
+    }
+    let mut fits = Vec::new();
+    for (i, l) in text.lines().enumerate() {
+        if l.trim().is_empty() {
+            continue;
+        }
+        let f: Fit = serde_json::from_str(l).map_err(|e| {
+            format!(
+                "{}:{}: not a calibration fit ({e}); remove the line to fit that ν again",
+                journal.display(),
+                i + 1
+            )
+        })?;
+        if nus.iter().any(|&nu| same(nu, f.nu)) {
+            fits.push(f);
+        }
+    }
+    Ok(fits)
 }
 
 /// The resumable loop of [`run`]: fits every ν of `nus` with `fit` (two at a time, one per core)
@@ -227,7 +262,7 @@ pub fn fit_resumable(
     fit: &(dyn Fn(f64) -> Result<Fit, String> + Sync),
     say: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Fit>, String> {
-    let done = journal_fits(nus, journal);
+    let done = journal_fits(nus, journal, say)?;
     for f in &done {
         say(&format!(
             "ν = {}: taken from {} (γ = {:.4}, MPR = {:.4})",
