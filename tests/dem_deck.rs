@@ -395,3 +395,19 @@ fn non_finite_values_are_refused_with_file_and_line() {
         assert!(out.contains("in.test:17") && out.contains("expected a finite number"), "{bad}: {out}");
     }
 }
+
+#[test]
+fn out_of_scope_features_stop_before_the_first_line_naming_theirs() {
+    // Checked before anything runs: nothing of the deck's mechanical part is written.
+    for (line, says) in [
+        (
+            "pair_style gran/hertz/history 266000.0 NULL 500.0 NULL 0.5 1",
+            "the LIGGGHTS 2.x pair_style gran/hertz/history, which LIGGGHTS 3.8 rejects too",
+        ),
+        ("fix heat all heat/gran initial_temperature 300", "heat transfer (fix heat/gran)"),
+        ("fix w all mesh/surface/stress file a.stl type 1 wear finnie", "wear of mesh walls"),
+    ] {
+        let (ok, out) = run_deck(&BASE.replace("pair_style gran model hertz tangential history", line), &[]);
+        assert!(!ok && out.contains(&format!("in.test:11: out of scope: {says}")), "{line}: {out}");
+    }
+}

@@ -173,3 +173,84 @@ fn shrink_wrapped_box_follows_particles_that_a_fixed_box_loses() {
     assert_eq!(p.len(), 50);
     assert!(p.iter().all(|a| a[2] < -0.01 + 0.008), "the particles moved 10 mm down");
 }
+
+/// The deck of the LIGGGHTS tutorials' pattern: a group over the box, an insertion fix of that
+/// group refilling a 4 mm slab every 500 steps (particles leave it at 10 m/s, 5 mm per period),
+/// `fix nve/sphere` of the group; thermo every 100 steps.
+fn refill_deck() -> String {
+    format!(
+        "{BASE}region slab block -0.008 0.008 -0.008 0.008 0.004 0.008 units box
+group g region box
+fix pts1 all particletemplate/sphere 15485863 atom_type 1 density constant 1000 radius constant 0.0005
+fix pdd all particledistribution/discrete 32452843 1 pts1 1.0
+fix ins g insert/pack seed 32452867 distributiontemplate pdd insert_every 500 overlapcheck yes all_in yes vel constant 0 0 -10 region slab particles_in_region 20
+fix integr g nve/sphere
+thermo_style custom step atoms vol
+thermo 100
+thermo_modify lost ignore norm no
+run 1600
+unfix ins
+run 1000
+"
+    )
+    .replace("boundary f f f", "boundary m m m")
+}
+
+/// (step, atoms, volume) of every thermo line.
+fn thermo_rows(out: &str) -> Vec<(u64, usize, f64)> {
+    out.lines()
+        .filter_map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            match w.as_slice() {
+                [s, n, v] => Some((s.parse().ok()?, n.parse().ok()?, v.parse().ok()?)),
+                _ => None,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn periodic_insertion_refills_its_region_into_its_group_until_unfixed() {
+    let (ok, out, _) = run_deck(&refill_deck(), &[]);
+    assert!(ok, "{out}");
+    let rows = thermo_rows(&out);
+    let at =
+        |step: u64| rows.iter().rev().find(|r| r.0 == step).unwrap_or_else(|| panic!("step {step}: {out}"));
+    // As LIGGGHTS: the first insertion on the step after the definition, then every 500 steps
+    // (1, 501, 1001, 1501), each filling the emptied slab back to 20.
+    for (step, n) in [(0, 20), (500, 20), (600, 40), (1000, 40), (1100, 60), (1500, 60), (1600, 80)] {
+        assert_eq!(at(step).1, n, "atoms at step {step}:\n{out}");
+    }
+    assert_eq!(out.matches("inserted 20 particles").count(), 4, "{out}");
+    // After `unfix ins` nothing more comes.
+    assert_eq!(at(2600).1, 80, "{out}");
+    // The reported box is LIGGGHTS': the created box while every centre is inside it (m keeps it
+    // as the minimum), growing once particles fall below z = -10 mm (10 m/s for 2.6 ms).
+    assert_eq!(at(0).2, 8e-6, "{out}");
+    assert!(at(2600).2 > 8.5e-6, "{out}");
+}
+
+#[test]
+fn a_group_that_misses_particles_is_refused_naming_the_fix() {
+    // Particles inserted into `all` are not in `g`: nve/sphere on `g` would leave them still.
+    let d = refill_deck().replace("fix ins g insert/pack", "fix ins all insert/pack");
+    let (ok, out, _) = run_deck(&d, &[]);
+    assert!(
+        !ok && out.contains("fix integr nve/sphere on group g, which does not hold every particle"),
+        "{out}"
+    );
+    assert!(out.contains("in.test:"), "file and line: {out}");
+    // A particle added after a fix acts on `g`, outside it.
+    let d = refill_deck().replace("run 1600", "create_atoms 1 single 0 0 0 units box\nrun 1600");
+    let (ok, out, _) = run_deck(&d, &[]);
+    assert!(!ok && out.contains("fix integr nve/sphere acts on group g"), "{out}");
+    // Group styles other than region, and unknown groups.
+    for (from, to, says) in [
+        ("group g region box", "group g type 1", "group style type"),
+        ("group g region box", "group g region nowhere", "unknown region nowhere"),
+        ("fix integr g nve/sphere", "fix integr h nve/sphere", "no group h"),
+    ] {
+        let (ok, out, _) = run_deck(&refill_deck().replace(from, to), &[]);
+        assert!(!ok && out.contains(says), "{to}: {out}");
+    }
+}

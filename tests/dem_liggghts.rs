@@ -111,6 +111,19 @@ fn two_particle_collision_matches_liggghts_step_by_step() {
     }
 }
 
+/// Primitive `zcylinder` walls: three spheres pressed, rolling and sliding on the inside of an
+/// off-centre cylinder and one thrown against its outside, every quantity every 10 steps.
+#[test]
+fn spheres_on_a_primitive_cylinder_wall_match_liggghts_step_by_step() {
+    if !have_liggghts() {
+        return;
+    }
+    let deck = repo().join("liggghts_inputs/spheres_in_cylinder.in");
+    let (o, t) = run_both(&deck, &[], &[]);
+    let f = "post/cylinder.dump";
+    assert_dumps_agree(&o.path().join(f), &t.path().join(f), 1e-12);
+}
+
 #[test]
 fn particle_between_moving_plates_matches_liggghts_step_by_step() {
     if !have_liggghts() {

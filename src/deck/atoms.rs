@@ -123,6 +123,7 @@ impl Deck {
             return Err(format!("atom type {typ} outside 1..{}", self.ntypes));
         }
         let x = Vec3::new(num(a[3])?, num(a[4])?, num(a[5])?);
+        self.groups.particles_added(None)?;
         let id = self.world.p.id.iter().copied().max().unwrap_or(0) + 1;
         // LIGGGHTS default for a new sphere: diameter 1, density 1 (set changes it).
         self.world.p.push(id, typ - 1, x, 1.0, 1.0);

@@ -19,6 +19,7 @@ const COMMANDS: &[(&str, Handler)] = &[
     ("echo", no_effect),
     ("soft_particles", no_effect),
     ("region", Deck::region),
+    ("group", Deck::group),
     ("create_box", create_box),
     ("read_data", read_data),
     ("create_atoms", Deck::create_atoms),
@@ -126,11 +127,12 @@ fn boundary(d: &mut Deck, a: &[&str]) -> R<()> {
         d.periodic[k] = match a[1 + k] {
             "p" => true,
             "f" => false,
-            // Shrink-wrapped: the box grows with the particles, never below the created box (see
-            // `Deck::shrink_wrap`). `s` may shrink below it in LIGGGHTS; a box larger than the
-            // particles changes no force, only box-size outputs, so both are read the same way.
+            // Shrink-wrapped: the engine's box grows with the particles, never below the created
+            // box; the outputs report LIGGGHTS' box (`m` with the created box as minimum, `s`
+            // without), see `Deck::shrink_wrap`.
             "m" | "s" => {
                 d.shrink[k] = true;
+                d.shrink_min[k] = a[1 + k] == "m";
                 false
             }
             other => {
@@ -157,6 +159,7 @@ fn read_data(d: &mut Deck, a: &[&str]) -> R<()> {
     if a.len() > 2 {
         return Err(unsupported("read_data keywords"));
     }
+    d.groups.particles_added(None)?;
     d.read_data(a[1])
 }
 
@@ -229,10 +232,8 @@ fn timestep(d: &mut Deck, a: &[&str]) -> R<()> {
 
 fn compute(d: &mut Deck, a: &[&str]) -> R<()> {
     need(a, 4)?;
+    d.groups.act_on(a[2], &format!("compute {} {}", a[1], a[3]))?;
     if a[3] == "pair/gran/local" {
-        if a[2] != "all" {
-            return Err(unsupported(&format!("compute group '{}' (all)", a[2])));
-        }
         d.pair_locals.insert(a[1].into(), local::PairLocal::parse(&a[4..])?);
         return Ok(());
     }
@@ -285,7 +286,12 @@ fn thermo_modify(d: &mut Deck, a: &[&str]) -> R<()> {
                 k += 3;
             }
             "norm" if a.get(k + 1) == Some(&"no") => k += 2,
-            "lost" if a.get(k + 1) == Some(&"error") => k += 2,
+            // A lost particle always stops the run (deleting it is not supported); with every
+            // non-periodic axis shrink-wrapped (`boundary m`/`s`) none can be lost.
+            "lost" if matches!(a.get(k + 1), Some(&"error") | Some(&"ignore") | Some(&"warn")) => {
+                d.lost_policy = a[k + 1].to_string();
+                k += 2
+            }
             // Already so: stdout is line-buffered and the log is flushed when the
             // deck ends, after an error too.
             "flush" if matches!(a.get(k + 1), Some(&"yes") | Some(&"no")) => k += 2,

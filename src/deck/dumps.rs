@@ -11,9 +11,7 @@ impl Deck {
             "custom/vtk" | "mesh/vtk" => return self.dump_vtk(a),
             "custom" => {}
             "local" => {
-                if a[2] != "all" {
-                    return Err(unsupported(&format!("dump group '{}' (all)", a[2])));
-                }
+                self.groups.act_on(a[2], &format!("dump {} {}", a[1], a[3]))?;
                 self.local_dumps.push(local::LocalDump::parse(a[1], &a[4..])?);
                 return Ok(());
             }
@@ -22,9 +20,7 @@ impl Deck {
         if a.len() < 7 {
             return Err("dump custom: expected N file columns…".into());
         }
-        if a[2] != "all" {
-            return Err(unsupported(&format!("dump group '{}' (all)", a[2])));
-        }
+        self.groups.act_on(a[2], &format!("dump {} {}", a[1], a[3]))?;
         let every = int(a[4])?;
         if every <= 0 {
             return Err("dump: N must be > 0".into());
@@ -48,9 +44,7 @@ impl Deck {
         if a.len() < 7 {
             return Err(format!("dump {}: expected N file and at least one column or keyword", a[3]));
         }
-        if a[2] != "all" {
-            return Err(unsupported(&format!("dump group '{}' (all)", a[2])));
-        }
+        self.groups.act_on(a[2], &format!("dump {} {}", a[1], a[3]))?;
         let every = int(a[4])?;
         if every <= 0 {
             return Err("dump: N must be > 0".into());

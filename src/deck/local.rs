@@ -196,8 +196,9 @@ impl LocalDump {
             bc(1),
             bc(2)
         );
+        let (lo, hi) = w.output_box().unwrap_or((d.lo, d.hi));
         for a in 0..3 {
-            s.push_str(&format!("{} {}\n", format::g(d.lo[a], 6), format::g(d.hi[a], 6)));
+            s.push_str(&format!("{} {}\n", format::g(lo[a], 6), format::g(hi[a], 6)));
         }
         s.push_str(&format!("ITEM: ENTRIES {} \n", self.labels.join(" ")));
         // One line per contact: every referenced compute lists the same contacts in the same order.

@@ -11,6 +11,7 @@ mod dumps;
 pub mod expr;
 mod fixes;
 pub mod format;
+mod groups;
 mod lexer;
 mod local;
 pub mod output;
@@ -29,7 +30,7 @@ use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::engine::{Closure, Domain, Mesh, PlaneWall, StepError, WallFix, WallGeom, World};
+use crate::engine::{Closure, CylinderWall, Domain, Mesh, PlaneWall, StepError, WallFix, WallGeom, World};
 use crate::physics::hertz::Tangential;
 use crate::physics::{Material, MprTest, Vec3};
 use lexer::strip_comment;
@@ -145,6 +146,8 @@ enum FixKind {
     AveTime(usize),
     MultiContact,
     Deform,
+    /// `insert/pack`: `unfix` drops its insertions not yet done.
+    Insert,
 }
 
 #[derive(Debug, Clone)]
@@ -171,12 +174,19 @@ struct Deck {
     fixes: Vec<(String, FixKind)>,
     computes: HashMap<String, ComputeKind>,
     regions: HashMap<String, regions::Region>,
+    groups: groups::Groups,
+    /// `thermo_modify lost`: error (the default), ignore or warn.
+    lost_policy: String,
     /// `fix particletemplate/sphere` and `fix particledistribution/discrete` definitions, and the
     /// `fix insert/pack` insertions waiting for the next run.
     insertion: fixes::insert::Insertion,
     periodic: [bool; 3],
     /// Shrink-wrapped axes (`boundary m` or `s`): the box follows the particles.
     shrink: [bool; 3],
+    /// `boundary m` (true) or `s` on a shrink-wrapped axis.
+    shrink_min: [bool; 3],
+    /// The box as created, the minimum of a `boundary m` axis.
+    box0: Option<(Vec3, Vec3)>,
     ntypes: usize,
     thermo_every: u64,
     thermo_cols: Vec<String>,
@@ -253,9 +263,13 @@ impl Deck {
             fixes: Vec::new(),
             computes: HashMap::new(),
             regions: HashMap::new(),
+            groups: Default::default(),
+            lost_policy: "error".into(),
             insertion: Default::default(),
             periodic: [false; 3],
             shrink: [false; 3],
+            shrink_min: [false; 3],
+            box0: None,
             ntypes: 0,
             thermo_every: 0,
             thermo_cols: vec!["step".into(), "atoms".into(), "ke".into()],

@@ -136,8 +136,9 @@ impl Dump {
             bc(1),
             bc(2)
         ));
+        let (lo, hi) = w.output_box().unwrap_or((d.lo, d.hi));
         for a in 0..3 {
-            s.push_str(&format!("{} {}\n", format::g(d.lo[a], 6), format::g(d.hi[a], 6)));
+            s.push_str(&format!("{} {}\n", format::g(lo[a], 6), format::g(hi[a], 6)));
         }
         s.push_str(&format!("ITEM: ATOMS {} \n", self.names.join(" ")));
         // Rows in id order (LIGGGHTS `dump_modify sort id`), whatever the engine's spatial

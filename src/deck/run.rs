@@ -40,6 +40,10 @@ impl Deck {
     /// at list rebuilds, which come before a particle moves a skin; so a box kept a skin beyond
     /// every particle after each step never loses one. It only grows, so it never falls below the
     /// created box (LIGGGHTS' `m` minimum).
+    ///
+    /// The outputs report LIGGGHTS' box instead (LAMMPS `Domain::reset_box`): on a shrink-wrapped
+    /// axis the extent of the particle centres widened by 1e-4 of the created length, and for `m`
+    /// never inside the created box. Forces do not depend on either.
     fn shrink_wrap(&mut self) {
         if !self.shrink.iter().any(|&s| s) {
             return;
@@ -47,13 +51,25 @@ impl Deck {
         let skin = self.world.skin;
         let p = &self.world.p;
         let Some(d) = self.world.domain.as_mut() else { return };
+        let (lo0, hi0) = *self.box0.get_or_insert((d.lo, d.hi));
+        let (mut lo, mut hi) = (d.lo, d.hi);
         for a in (0..3).filter(|&a| self.shrink[a]) {
+            let (mut cmin, mut cmax) = (f64::INFINITY, f64::NEG_INFINITY);
             for i in 0..p.len() {
                 let m = p.radius[i] + skin;
                 d.lo[a] = d.lo[a].min(p.x[i][a] - m);
                 d.hi[a] = d.hi[a].max(p.x[i][a] + m);
+                cmin = cmin.min(p.x[i][a]);
+                cmax = cmax.max(p.x[i][a]);
             }
+            let small = 1e-4 * (hi0[a] - lo0[a]);
+            (lo[a], hi[a]) = match (p.len(), self.shrink_min[a]) {
+                (0, _) => (lo0[a], hi0[a]),
+                (_, true) => ((cmin - small).min(lo0[a]), (cmax + small).max(hi0[a])),
+                (_, false) => (cmin - small, cmax + small),
+            };
         }
+        self.world.reported_box = Some((lo, hi));
     }
 
     pub(super) fn run(&mut self, a: &[&str]) -> R<()> {
@@ -110,8 +126,21 @@ impl Deck {
         let threaded0 = self.world.threaded_passes();
         let kernel0 = (self.world.mc_kernel_contacts, self.world.mc_kernel_fallbacks);
         while self.world.step < end {
+            // An `insert_every N` insertion: the new particles enter as at the start of a run
+            // (box, lists and forces set up again), without a new thermo header.
+            if self.step_inserts() && self.insert_due()? {
+                self.shrink_wrap();
+                self.prepare()?;
+                for wmsg in self.world.setup()? {
+                    self.warn(&wmsg);
+                }
+            }
+            let policy = &self.lost_policy;
             self.world.step().map_err(|e| {
-                let m = e.to_string();
+                let mut m = e.to_string();
+                if policy != "error" && m.contains("lost particle") {
+                    m += &format!(" (thermo_modify lost {policy} asks to delete it; mcdem does not delete particles, so the run stops)");
+                }
                 self.instability = Some(e);
                 m
             })?;

@@ -1,5 +1,6 @@
 //! Decks built on LIGGGHTS features outside this project's scope (heat transfer, SPH,
-//! superquadrics, multisphere bodies, ParScale/CFD coupling, wear) stop before their first line
+//! superquadrics, multisphere bodies, ParScale/CFD coupling, wear, and the LIGGGHTS 2.x granular
+//! pair styles that LIGGGHTS 3.8 no longer reads) stop before their first line
 //! runs, with the line that needs the feature: running their mechanical part alone would give
 //! output that looks complete and is not.
 
@@ -42,6 +43,10 @@ fn feature(w: &[&str]) -> Option<String> {
             None
         }
         ["pair_style", s, ..] if style(s).is_some() => style(s).map(|f| format!("{f} (pair_style {s})")),
+        // LIGGGHTS 2.x styles: LIGGGHTS 3.8 itself stops on them, so there is nothing to agree with.
+        ["pair_style", s, ..] if s.starts_with("gran/") => Some(format!(
+            "the LIGGGHTS 2.x pair_style {s}, which LIGGGHTS 3.8 rejects too ('Invalid pair style'); write 'pair_style gran model hertz tangential history'"
+        )),
         // ParScale's own input files (they sit next to the decks that drive the coupling).
         ["particle_mesh" | "particle_data" | "coupling" | "modelEqs" | "control", ..] => {
             Some(format!("a ParScale particle-model input ('{}'), not a LIGGGHTS deck", w[0]))

@@ -154,8 +154,8 @@ impl Deck {
                 _ => return Err(unsupported(&format!("atom value {name}"))),
             });
         }
-        let d = w.domain;
-        let len = |a: usize| d.map(|d| d.hi[a] - d.lo[a]).unwrap_or(0.0);
+        let b = w.output_box();
+        let len = |a: usize| b.map(|(lo, hi)| hi[a] - lo[a]).unwrap_or(0.0);
         Ok(match name {
             "step" => w.step as f64,
             "atoms" => w.p.len() as f64,
@@ -164,7 +164,7 @@ impl Deck {
             "ke" => w.kinetic_energy(),
             "pe" => 0.0,
             "etotal" => w.kinetic_energy(),
-            "vol" => d.map(|d| d.volume()).unwrap_or(0.0),
+            "vol" => len(0) * len(1) * len(2),
             "lx" => len(0),
             "ly" => len(1),
             "lz" => len(2),

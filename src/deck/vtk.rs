@@ -209,11 +209,11 @@ impl VtkDump {
         let path = PathBuf::from(self.file.replace('*', &step));
         let text = match &self.what {
             What::Particles(p) => {
-                let d = w.domain.ok_or("dump before the box exists")?;
+                let (lo, hi) = w.output_box().ok_or("dump before the box exists")?;
                 // LIGGGHTS puts the box next to the particles: prefix + "boundingBox_" + step + suffix.
                 let (pre, post) = self.file.split_once('*').expect("checked at parse");
                 let bb = PathBuf::from(format!("{pre}boundingBox_{step}{post}"));
-                write_file(&bb, &bounding_box(&d.lo, &d.hi))?;
+                write_file(&bb, &bounding_box(&lo, &hi))?;
                 particles(p, w)
             }
             What::Mesh(m) => mesh(m, w, moving),

@@ -45,5 +45,5 @@ pub use contacts::PairContact;
 pub use domain::Domain;
 pub use mesh::Mesh;
 pub use particles::Particles;
-pub use walls::{PlaneWall, WallFix, WallGeom};
+pub use walls::{CylinderWall, PlaneWall, WallFix, WallGeom};
 pub use world::{Closure, StepError, World};

@@ -69,6 +69,7 @@ impl World {
             if delta > 0.0 {
                 let wt = match &self.walls[c.wall as usize].geom {
                     WallGeom::Plane(pl) => pl.wall_type,
+                    WallGeom::Cylinder(cy) => cy.wall_type,
                     WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
                 };
                 let co = &self.coeffs[self.p.typ[i] * nt + wt];

@@ -62,6 +62,14 @@ pub(super) fn collect(
                     out.push(fresh);
                 }
             }
+            WallGeom::Cylinder(cy) => {
+                let Some(point) = cy.nearest(&x) else { continue };
+                if (x - point).norm_squared() < reach * reach {
+                    let mut fresh = WallContact::fresh(i, w, 0, 0, point, Vec3::zeros());
+                    take_history(&mut fresh, old, &mut k);
+                    out.push(fresh);
+                }
+            }
             WallGeom::Meshes(_) => {
                 let (mi, t) = (c.mesh as usize, c.tri as usize);
                 let m = &s.meshes[mi];

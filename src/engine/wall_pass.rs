@@ -81,6 +81,11 @@ impl World {
                             self.wall_search.wall_cand.push(cand(0, 0));
                         }
                     }
+                    WallGeom::Cylinder(cy) => {
+                        if cy.nearest(&x).is_some_and(|q| (x - q).norm_squared() < reach * reach) {
+                            self.wall_search.wall_cand.push(cand(0, 0));
+                        }
+                    }
                     WallGeom::Meshes(list) => {
                         for &mi in list {
                             let m = &self.meshes[mi];
@@ -276,6 +281,7 @@ impl WallCtx<'_> {
     pub(super) fn coeff(&self, c: &WallContact) -> &PairCoeffs {
         let wall_type = match &self.walls[c.wall as usize].geom {
             WallGeom::Plane(pl) => pl.wall_type,
+            WallGeom::Cylinder(cy) => cy.wall_type,
             WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
         };
         &self.coeffs[self.typ[c.p as usize] * self.nt + wall_type]
@@ -403,7 +409,7 @@ mod tests {
                     tri: tri as u32,
                 };
                 match &wall.geom {
-                    WallGeom::Plane(_) => all.push(cand(0, 0)),
+                    WallGeom::Plane(_) | WallGeom::Cylinder(_) => all.push(cand(0, 0)),
                     WallGeom::Meshes(list) => {
                         for &mi in list {
                             all.extend((0..w.meshes[mi].tris.len()).map(|t| cand(mi, t)));

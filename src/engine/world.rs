@@ -51,6 +51,10 @@ impl std::error::Error for StepError {}
 #[derive(Debug, Default)]
 pub struct World {
     pub domain: Option<Domain>,
+    /// The box as outputs report it (dump headers, `vol`), where the deck's shrink-wrapped box
+    /// (LIGGGHTS' `boundary m`/`s`: the particle centres' extent) differs from `domain`, which
+    /// keeps a radius and a skin of margin so that no particle is ever outside it.
+    pub reported_box: Option<(Vec3, Vec3)>,
     pub p: Particles,
     pub ntypes: usize,
     /// Per type (0-based): material.
@@ -128,6 +132,11 @@ impl World {
 
     /// Checks that the world is complete and consistent, and builds the neighbour list: called by
     /// every `run` before the first step (LAMMPS `setup`).
+    /// The box the outputs report: [`World::reported_box`] if set, else the domain's.
+    pub fn output_box(&self) -> Option<(Vec3, Vec3)> {
+        self.reported_box.or(self.domain.map(|d| (d.lo, d.hi)))
+    }
+
     pub fn setup(&mut self) -> Result<Vec<String>, String> {
         let mut warnings = Vec::new();
         let domain = self.domain.ok_or("no simulation box (create_box or read_data) before run")?;

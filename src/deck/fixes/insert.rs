@@ -20,6 +20,8 @@ pub(in crate::deck) struct Insertion {
     templates: HashMap<String, Template>,
     distributions: HashMap<String, Distribution>,
     pending: Vec<Pack>,
+    /// `insert_every N` insertions: each with the step of its next insertion.
+    periodic: Vec<(Pack, u64)>,
 }
 
 #[derive(Debug, Clone)]
@@ -89,6 +91,12 @@ enum Target {
 struct Pack {
     /// `fix ID insert/pack (line N)`, for messages at the run that inserts.
     label: String,
+    /// The fix ID (`unfix` stops its insertions).
+    fix: String,
+    /// Steps between insertions (`insert_every N`); `None`: once.
+    every: Option<u64>,
+    /// Insertions done so far: each draws from its own random stream.
+    round: u64,
     seed: u64,
     dist: String,
     region: Region,
@@ -237,6 +245,7 @@ impl Deck {
         let label = format!("{what} (line {})", self.line_no);
         let (mut s, mut dist, mut region, mut target) = (None, None, None, None);
         let (mut all_in, mut exact, mut maxattempt) = (false, true, 50usize);
+        let mut every = None;
         let (mut vel, mut omega) = (Vec3::zeros(), Vec3::zeros());
         let mut k = 4;
         let arg = |j: usize| a.get(j).copied().ok_or_else(|| format!("{what}: {} needs a value", a[j - 1]));
@@ -280,11 +289,13 @@ impl Deck {
                 "mass_in_region" => {
                     target = Some(Target::Mass(positive(v, &format!("{what}: mass_in_region"))?))
                 }
-                "insert_every" if v == "once" => {}
+                "insert_every" if v == "once" => every = None,
                 "insert_every" => {
-                    return Err(unsupported(&format!(
-                        "{what}: insert_every {v} (only once: periodic insertion)"
-                    )))
+                    let n = int(v).map_err(|e| format!("{what}: insert_every: {e}"))?;
+                    if n < 1 {
+                        return Err(format!("{what}: insert_every must be once or >= 1, got {v}"));
+                    }
+                    every = Some(n as u64);
                 }
                 "overlapcheck" if v == "yes" => {}
                 "overlapcheck" => return Err(unsupported(&format!("{what}: overlapcheck {v} (only yes)"))),
@@ -327,6 +338,9 @@ impl Deck {
         }
         let pack = Pack {
             label,
+            fix: a[1].to_string(),
+            every,
+            round: 0,
             seed: s.ok_or_else(|| format!("{what}: seed is required"))?,
             dist: dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
             region: region.ok_or_else(|| format!("{what}: region is required"))?,
@@ -341,8 +355,12 @@ impl Deck {
             vel,
             omega,
         };
-        self.insertion.pending.push(pack);
-        Ok(FixKind::Property)
+        match pack.every {
+            None => self.insertion.pending.push(pack),
+            // As LIGGGHTS: first on the step after the definition, then every N steps.
+            Some(_) => self.insertion.periodic.push((pack, self.world.step + 1)),
+        }
+        Ok(FixKind::Insert)
     }
 
     /// Runs the insertions waiting for this run (at its start, as LIGGGHTS inserts on the first step).
@@ -351,7 +369,44 @@ impl Deck {
             let n = self.insert(&pack).map_err(|e| format!("{}: {e}", pack.label))?;
             self.say(&format!("INFO: {}: inserted {n} particles", pack.label));
         }
+        self.insert_due()?;
         Ok(())
+    }
+
+    /// The `insert_every N` insertions due before the coming step; whether any particle came.
+    pub(in crate::deck) fn insert_due(&mut self) -> R<bool> {
+        let next = self.world.step + 1;
+        let mut added = false;
+        for k in 0..self.insertion.periodic.len() {
+            let (pack, due) = &self.insertion.periodic[k];
+            if *due > next {
+                continue;
+            }
+            let pack = pack.clone();
+            let n = self.insert(&pack).map_err(|e| format!("{} at step {next}: {e}", pack.label))?;
+            self.say(&format!("INFO: {}: inserted {n} particles at step {next}", pack.label));
+            added |= n > 0;
+            let (p, due) = &mut self.insertion.periodic[k];
+            p.round += 1;
+            *due = next + p.every.unwrap_or(u64::MAX);
+        }
+        Ok(added)
+    }
+
+    /// Whether an `insert_every N` insertion is active (checked before each step).
+    pub(in crate::deck) fn step_inserts(&self) -> bool {
+        !self.insertion.periodic.is_empty()
+    }
+
+    /// Whether an insertion fix will still add particles (a group defined now misses them).
+    pub(in crate::deck) fn inserts_later(&self) -> bool {
+        !self.insertion.pending.is_empty() || !self.insertion.periodic.is_empty()
+    }
+
+    /// `unfix` of an insertion fix: its insertions not yet done are dropped.
+    pub(in crate::deck) fn stop_inserting(&mut self, fix: &str) {
+        self.insertion.pending.retain(|p| p.fix != fix);
+        self.insertion.periodic.retain(|(p, _)| p.fix != fix);
     }
 
     fn insert(&mut self, pack: &Pack) -> R<usize> {
@@ -380,7 +435,9 @@ impl Deck {
         let n = want.round().max(0.0) as usize;
         // Which template each particle comes from: exact shares (largest remainders), or each
         // drawn on its own.
-        let mut pick = SplitMix64(dist.seed ^ pack.seed.rotate_left(32));
+        // Round 0 keeps the streams of a single insertion; later rounds draw new ones.
+        let seed = pack.seed.wrapping_add(pack.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let mut pick = SplitMix64(dist.seed ^ seed.rotate_left(32));
         let mut counts = vec![0usize; templates.len()];
         if pack.exact {
             let raw: Vec<f64> = frac.iter().map(|f| f * n as f64).collect();
@@ -408,7 +465,7 @@ impl Deck {
         }
         let mut new: Vec<(f64, usize)> = Vec::with_capacity(n);
         for (j, t) in templates.iter().enumerate() {
-            let mut rng = SplitMix64(t.seed ^ pack.seed);
+            let mut rng = SplitMix64(t.seed ^ seed);
             new.extend((0..counts[j]).map(|_| (t.radius.draw(&mut rng), j)));
         }
         // Largest first; ties keep template order (a stable sort).
@@ -418,7 +475,7 @@ impl Deck {
         for i in 0..p.len() {
             grid.add(p.x[i], p.radius[i]);
         }
-        let mut rng = SplitMix64(pack.seed);
+        let mut rng = SplitMix64(seed);
         let mut id = p.id.iter().copied().max().unwrap_or(0);
         for (placed, &(r, j)) in new.iter().enumerate() {
             let margin = if pack.all_in { r } else { 0.0 };
@@ -435,6 +492,17 @@ impl Deck {
                 }
             }
             let Some(x) = at else {
+                // A periodic refill tops up what earlier rounds left in the region; falling short
+                // there is LIGGGHTS' warning, not an error (the first round must fit whole).
+                if pack.round > 0 {
+                    self.warn(&format!(
+                        "{}: Less insertions than requested: {placed} of {n} at step {} ({} random tries found no free place for one of radius {r:e} m)",
+                        pack.label,
+                        self.world.step + 1,
+                        pack.maxattempt
+                    ));
+                    return Ok(placed);
+                }
                 return Err(format!(
                     "the region has no room: placed {placed} of {n} particles, then {} random tries found no free place for one of radius {r:e} m (lower the target or enlarge the region)",
                     pack.maxattempt

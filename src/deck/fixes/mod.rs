@@ -12,8 +12,12 @@ impl Deck {
             return Err("fix: expected 'fix ID group style …'".into());
         }
         let (id, group, style) = (a[1], a[2], a[3]);
-        if group != "all" {
-            return Err(unsupported(&format!("fix group '{group}' (all)")));
+        // An insertion fix's group is where its particles go; any other fix acts on its group.
+        if style.starts_with("insert/") {
+            self.groups.check_exists(group, &format!("fix {id} {style}"))?;
+            self.groups.particles_added(Some(group))?;
+        } else {
+            self.groups.act_on(group, &format!("fix {id} {style}"))?;
         }
         if self.fixes.iter().any(|(n, _)| n == id) {
             // LIGGGHTS replaces a fix redefined with the same ID; only the stateless ones here.
@@ -130,6 +134,7 @@ impl Deck {
                 }
             }
             FixKind::MeshSurface(_) => return Err(unsupported("unfix of a mesh/surface fix")),
+            FixKind::Insert => self.stop_inserting(id),
         }
         Ok(())
     }

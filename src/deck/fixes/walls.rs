@@ -74,22 +74,46 @@ impl Deck {
         let (mut m, mut k) = Self::gran_model(a, 4)?;
         let geom = match a.get(k) {
             Some(&"primitive") => {
-                if a.len() < k + 5 || a[k + 1] != "type" {
-                    return Err("wall/gran primitive: expected 'type T xplane|yplane|zplane POS'".into());
+                if a.len() < k + 4 || a[k + 1] != "type" {
+                    return Err(
+                        "wall/gran primitive: expected 'type T xplane|yplane|zplane POS' or 'type T xcylinder|ycylinder|zcylinder R C1 C2'"
+                            .into(),
+                    );
                 }
                 let t = int(a[k + 2])? as usize;
-                let axis = match a[k + 3] {
-                    "xplane" => 0,
-                    "yplane" => 1,
-                    "zplane" => 2,
-                    other => return Err(unsupported(&format!("primitive wall {other}"))),
-                };
-                let pos = num(a[k + 4])?;
-                k += 5;
                 if t < 1 || (self.ntypes > 0 && t > self.ntypes) {
                     return Err(format!("wall type {t} outside 1..{}", self.ntypes));
                 }
-                WallGeom::Plane(PlaneWall { axis, pos, wall_type: t - 1 })
+                let style = a[k + 3];
+                let axis = |s: &str| ["x", "y", "z"].iter().position(|c| s.starts_with(c));
+                let value = |j: usize| {
+                    num(a
+                        .get(k + 4 + j)
+                        .ok_or_else(|| format!("wall/gran primitive {style}: missing value"))?)
+                };
+                match style {
+                    "xplane" | "yplane" | "zplane" => {
+                        let pos = value(0)?;
+                        k += 5;
+                        WallGeom::Plane(PlaneWall { axis: axis(style).unwrap_or(0), pos, wall_type: t - 1 })
+                    }
+                    "xcylinder" | "ycylinder" | "zcylinder" => {
+                        let (radius, c1, c2) = (value(0)?, value(1)?, value(2)?);
+                        if radius <= 0.0 {
+                            return Err(format!(
+                                "wall/gran primitive {style}: radius must be > 0, got {radius}"
+                            ));
+                        }
+                        k += 7;
+                        WallGeom::Cylinder(CylinderWall {
+                            axis: axis(style).unwrap_or(0),
+                            radius,
+                            center: [c1, c2],
+                            wall_type: t - 1,
+                        })
+                    }
+                    other => return Err(unsupported(&format!("primitive wall {other}"))),
+                }
             }
             Some(&"mesh") => {
                 if a.get(k + 1) != Some(&"n_meshes") || a.get(k + 3) != Some(&"meshes") {
