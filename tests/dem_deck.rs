@@ -411,3 +411,29 @@ fn out_of_scope_features_stop_before_the_first_line_naming_theirs() {
         assert!(!ok && out.contains(&format!("in.test:11: out of scope: {says}")), "{line}: {out}");
     }
 }
+
+#[test]
+fn contact_model_keywords_name_the_bad_value() {
+    let pair = "pair_style gran model hertz tangential history";
+    for (to, says) in [
+        (
+            "pair_style gran tangential history",
+            "in.test:11: pair_style gran: 'model hertz' or 'model mc_advanced' is required",
+        ),
+        (
+            "pair_style gran model hooke/hysteresis tangential history",
+            "in.test:11: unsupported granular model 'hooke/hysteresis' (hertz or mc_advanced)",
+        ),
+        (
+            "pair_style gran model hertz tangential spring",
+            "in.test:11: unsupported tangential model 'spring' (history or no_history)",
+        ),
+        (
+            "pair_style gran model hertz tangential history geometryTolerance 0.1",
+            "in.test:11: geometryTolerance is a setting of model mc_advanced",
+        ),
+    ] {
+        let (ok, out) = run_deck(&format!("{}run 1\n", BASE.replace(pair, to)), &[]);
+        assert!(!ok && out.contains(says), "{to}: {out}");
+    }
+}

@@ -3,10 +3,41 @@
 
 use super::*;
 
+/// The normal contact law a `model` keyword names: parsed once, so every later decision is a
+/// `match` the compiler checks rather than a string compared in several places.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum NormalModel {
+    /// `model hertz`: LIGGGHTS' Hertz law (Hertz–Mindlin with damping).
+    Hertz,
+    /// `model mc_advanced`: the advanced multi-contact law (Ghods et al. 2022, Eqs. 2–3).
+    McAdvanced,
+}
+
+impl std::str::FromStr for NormalModel {
+    type Err = String;
+    fn from_str(s: &str) -> R<Self> {
+        match s {
+            "hertz" => Ok(NormalModel::Hertz),
+            "mc_advanced" => Ok(NormalModel::McAdvanced),
+            other => Err(unsupported(&format!("granular model '{other}' (hertz or mc_advanced)"))),
+        }
+    }
+}
+
+/// `tangential history|no_history`.
+fn tangential_model(s: &str) -> R<Tangential> {
+    match s {
+        "history" => Ok(Tangential::History),
+        "no_history" => Ok(Tangential::NoHistory),
+        other => Err(unsupported(&format!("tangential model '{other}' (history or no_history)"))),
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct GranModel {
-    pub(super) model: String,
-    pub(super) tangential: String,
+    /// `None` until a `model` keyword is read (it is required).
+    pub(super) model: Option<NormalModel>,
+    pub(super) tangential: Tangential,
     pub(super) surface_mc: bool,
     pub(super) mpr_test: MprTest,
     /// `pairRadii stock`: pairs with LIGGGHTS's radius convention (see docs/dem.md).
@@ -39,28 +70,37 @@ impl GranModel {
 
     /// The combination is one the engines run, and every setting belongs to the chosen model.
     pub(super) fn check(&self) -> R<()> {
-        if !matches!(self.model.as_str(), "hertz" | "mc_advanced") {
-            return Err(unsupported(&format!("granular model '{}' (hertz or mc_advanced)", self.model)));
-        }
-        if !matches!(self.tangential.as_str(), "history" | "no_history") {
-            return Err(unsupported(&format!(
-                "tangential model '{}' (history or no_history)",
-                self.tangential
-            )));
-        }
-        if self.stock_pair_radii && self.model != "mc_advanced" {
+        let advanced = match self.model {
+            None => return Err("pair_style gran: 'model hertz' or 'model mc_advanced' is required".into()),
+            Some(m) => m == NormalModel::McAdvanced,
+        };
+        if self.stock_pair_radii && !advanced {
             return Err("pairRadii is a setting of model mc_advanced".into());
         }
-        if self.geometry_tolerance.is_some() && self.model != "mc_advanced" {
+        if self.geometry_tolerance.is_some() && !advanced {
             return Err("geometryTolerance is a setting of model mc_advanced".into());
         }
-        if self.update_every.is_some() && self.model != "mc_advanced" {
+        if self.update_every.is_some() && !advanced {
             return Err("updateEvery is a setting of model mc_advanced".into());
         }
-        if self.model == "mc_advanced" && self.surface_mc {
+        if advanced && self.surface_mc {
             return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
         }
         Ok(())
+    }
+
+    /// The model is `mc_advanced` (after [`GranModel::check`], a model is set).
+    pub(super) fn is_mc_advanced(&self) -> bool {
+        self.model == Some(NormalModel::McAdvanced)
+    }
+
+    /// The model's deck name, for messages.
+    pub(super) fn name(&self) -> &'static str {
+        match self.model {
+            Some(NormalModel::Hertz) => "hertz",
+            Some(NormalModel::McAdvanced) => "mc_advanced",
+            None => "(none)",
+        }
     }
 }
 
@@ -90,8 +130,8 @@ pub(super) fn update_every(x: &str) -> R<u64> {
 impl Deck {
     pub(super) fn gran_model(a: &[&str], start: usize) -> R<(GranModel, usize)> {
         let mut m = GranModel {
-            model: String::new(),
-            tangential: "history".into(),
+            model: None,
+            tangential: Tangential::History,
             surface_mc: false,
             mpr_test: MprTest::Abs,
             stock_pair_radii: false,
@@ -102,8 +142,8 @@ impl Deck {
         while k < a.len() {
             let v = a.get(k + 1).copied();
             match (a[k], v) {
-                ("model", Some(x)) => m.model = x.into(),
-                ("tangential", Some(x)) => m.tangential = x.into(),
+                ("model", Some(x)) => m.model = Some(x.parse()?),
+                ("tangential", Some(x)) => m.tangential = tangential_model(x)?,
                 ("cohesion", Some("off")) | ("rolling_friction", Some("off")) => {}
                 ("surface", Some("default")) => m.surface_mc = false,
                 ("surface", Some("multicontact")) => m.surface_mc = true,
@@ -130,10 +170,10 @@ impl Deck {
         // The command-line options, when given, take precedence over the deck's settings; they
         // approximate the multi-contact pass of mc_advanced and of nothing else.
         let (cli_tol, cli_every) = (self.cli_geometry_tolerance, self.cli_mc_every);
-        if m.model != "mc_advanced" && (cli_tol > 0.0 || cli_every > 1) {
+        if !m.is_mc_advanced() && (cli_tol > 0.0 || cli_every > 1) {
             return Err(format!(
                 "--mc-geometry-tolerance and --mc-update-every apply to model mc_advanced only; this pair style is model {}",
-                m.model
+                m.name()
             ));
         }
         // A pair style defined again starts from the defaults, as in LIGGGHTS.
@@ -176,7 +216,7 @@ impl Deck {
         let nu = per_type(self, "poissonsRatio")?;
         let rest = per_pair(self, "coefficientRestitution")?;
         let fric = per_pair(self, "coefficientFriction")?;
-        let (closure, gammas, mprs): (Closure, Vec<f64>, Option<Vec<f64>>) = if pair.model == "mc_advanced" {
+        let (closure, gammas, mprs): (Closure, Vec<f64>, Option<Vec<f64>>) = if pair.is_mc_advanced() {
             (
                 Closure::MultiContact,
                 per_type(self, "geometricPrefactor")?,
@@ -199,9 +239,7 @@ impl Deck {
                     .map_err(|e| format!("atom type {}: {e}", t + 1))?,
             );
         }
-        let tangential =
-            if pair.tangential == "no_history" { Tangential::NoHistory } else { Tangential::History };
-        self.world.set_materials(mats, &rest, &fric, tangential)?;
+        self.world.set_materials(mats, &rest, &fric, pair.tangential)?;
         self.world.closure = Some(closure);
         self.world.liggghts_radii = pair.surface_mc || pair.stock_pair_radii;
         self.world.mc_range =
