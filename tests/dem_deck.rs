@@ -94,6 +94,14 @@ fn pair_local_output_errors_name_the_problem() {
         format!("{BASE}compute fc all pair/gran/local delta\ndump dl all local 1 c.dump c_fc[2]\nrun 1\n");
     let (ok, out) = run_deck(&text, &[]);
     assert!(!ok && out.contains("c_fc[2] beyond its 1 columns"), "{out}");
+    // `history` has 3 columns under tangential history and none under no_history.
+    let text =
+        format!("{BASE}compute fc all pair/gran/local history\ndump dl all local 1 c.dump c_fc[3]\nrun 1\n");
+    let (ok, out) = run_deck(&text, &[]);
+    assert!(ok, "{out}");
+    let no_history = text.replace("tangential history", "tangential no_history");
+    let (ok, out) = run_deck(&no_history, &[]);
+    assert!(!ok && out.contains("c_fc[3] beyond its 0 columns"), "{out}");
 }
 
 #[test]

@@ -32,6 +32,9 @@ enum Quantity {
     ContactArea,
     /// Geometric overlap r_i + r_j − |x_i − x_j| with the original radii (1).
     Delta,
+    /// The pair's contact history as LIGGGHTS lists it: under `model hertz tangential history`
+    /// the tangential spring (3), under `no_history` nothing (0).
+    History,
 }
 
 impl Quantity {
@@ -46,6 +49,7 @@ impl Quantity {
             "torque" => Quantity::Torque,
             "contactArea" => Quantity::ContactArea,
             "delta" => Quantity::Delta,
+            "history" => Quantity::History,
             _ => return None,
         })
     }
@@ -55,6 +59,8 @@ impl Quantity {
 #[derive(Debug, Clone, PartialEq)]
 pub struct PairLocal {
     quantities: Vec<Quantity>,
+    /// Columns of `history` for the run's contact model (set when a run starts).
+    history: usize,
 }
 
 impl PairLocal {
@@ -72,7 +78,7 @@ impl PairLocal {
                 Quantity::parse(k).ok_or_else(|| format!("unsupported compute pair/gran/local keyword {k}"))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(PairLocal { quantities })
+        Ok(PairLocal { quantities, history: 3 })
     }
 
     /// Values of every touching pair, one row each.
@@ -103,6 +109,7 @@ impl PairLocal {
                                 / (r * r),
                         ),
                         Quantity::Delta => row.push(ri + rj - r),
+                        Quantity::History => row.extend(c.shear.iter().take(self.history)),
                     }
                 }
                 row
@@ -222,6 +229,19 @@ impl LocalDump {
 }
 
 impl PairLocal {
+    /// Sets the columns of `history` for the run's model: `Some(n)`, or `None` where the record
+    /// is not one this reader writes (an error if the compute lists `history`).
+    pub fn set_history(&mut self, columns: Option<usize>) -> Result<(), String> {
+        match columns {
+            Some(n) => self.history = n,
+            None if self.quantities.contains(&Quantity::History) => {
+                return Err("unsupported compute pair/gran/local keyword history with a multi-contact model (its contact record is the plugin's own layout; list the other keywords)".into())
+            }
+            None => {}
+        }
+        Ok(())
+    }
+
     fn rows_width(&self) -> usize {
         self.quantities
             .iter()
@@ -233,6 +253,7 @@ impl PairLocal {
                 | Quantity::ForceTangential
                 | Quantity::Torque => 3,
                 Quantity::ContactArea | Quantity::Delta => 1,
+                Quantity::History => self.history,
             })
             .sum()
     }

@@ -102,6 +102,15 @@ impl Deck {
         self.say("Setting up run ...");
         let header = self.thermo_header();
         self.say(&header);
+        let history =
+            self.pair.as_ref().and_then(|p| match (p.is_mc_advanced() || p.surface_mc, p.tangential) {
+                (true, _) => None,
+                (false, Tangential::History) => Some(3),
+                (false, Tangential::NoHistory) => Some(0),
+            });
+        for c in self.pair_locals.values_mut() {
+            c.set_history(history)?;
+        }
         for d in &self.local_dumps {
             d.check(&self.pair_locals)?;
         }

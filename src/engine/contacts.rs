@@ -76,6 +76,9 @@ pub struct PairContact {
     pub force: Vec3,
     /// Contact torque on i [N m].
     pub torque: Vec3,
+    /// The tangential spring of `tangential history` [m] (what LIGGGHTS stores as the pair's
+    /// contact history); zero under `no_history`.
+    pub shear: Vec3,
 }
 
 /// A particle and a wall element (plane, or one triangle of a mesh) that may come within reach

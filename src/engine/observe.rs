@@ -126,9 +126,13 @@ impl World {
             && self.contacts.pair_hist.len() == np
             && self.contacts.pair_dr.len() == np;
         let closure = mc.then_some((&self.contacts.pair_dr[..], &mut self.contacts.pair_hist[..]));
-        let mut touching = Touching { x: &self.p.x, domain, out: Vec::new() };
+        let mut touching = Touching { x: &self.p.x, domain, out: Vec::new(), pair: Vec::new() };
         ctx.pass(&mut self.contacts.pairs, closure, false, &mut touching).map_err(|e| *e)?;
-        Ok(touching.out)
+        let mut out = touching.out;
+        for (c, &k) in out.iter_mut().zip(&touching.pair) {
+            c.shear = self.contacts.pairs[k].shear;
+        }
+        Ok(out)
     }
 
     /// Particle–particle contacts carrying a force at the last force pass (set-up pass included).

@@ -54,10 +54,12 @@ pub(super) struct Touching<'a> {
     pub(super) x: &'a [Vec3],
     pub(super) domain: Domain,
     pub(super) out: Vec<PairContact>,
+    /// The pair index of each entry of `out` (its history is read after the pass).
+    pub(super) pair: Vec<usize>,
 }
 
 impl PairSink for Touching<'_> {
-    fn put(&mut self, _k: usize, i: usize, j: usize, o: &PairOut) {
+    fn put(&mut self, k: usize, i: usize, j: usize, o: &PairOut) {
         if o.force == Vec3::zeros() {
             return;
         }
@@ -71,7 +73,9 @@ impl PairSink for Touching<'_> {
             periodic: branch != raw,
             force: o.force,
             torque: o.torque_i,
+            shear: Vec3::zeros(),
         });
+        self.pair.push(k);
     }
 }
 
