@@ -44,7 +44,7 @@ fn head_on_contact_conserves_momentum_and_slows_the_approach() {
 /// coefficient of restitution (separation over approach speed of the centres of mass), the steps in
 /// contact, the largest rise of the total energy between steps (relative to the initial kinetic
 /// energy) and the energy lost, and the largest momentum drift.
-fn collide(dt: f64, h: f64) -> (f64, usize, f64, f64, f64) {
+fn collide(dt: f64, h: f64) -> (f64, usize, f64, f64, f64, usize) {
     let text = two_discs("")
         .replace("\"dt\": 1e-5", &format!("\"dt\": {dt:e}"))
         .replace("\"h\": 1e-3", &format!("\"h\": {h:e}"));
@@ -59,8 +59,10 @@ fn collide(dt: f64, h: f64) -> (f64, usize, f64, f64, f64) {
     let p_ref = s.bodies[0].points.momentum().norm();
     let (mut in_contact, mut open_after, mut touched, mut rise, mut e_prev, mut drift) =
         (0, 0, false, 0.0f64, e0, 0.0f64);
+    let mut sliver = 0;
     for k in 0..(2e-3 / dt) as usize {
         let r = step_bodies(&mut s.bodies, &[], &s.options, &s.contact, k, &mut ws).unwrap();
+        sliver += r.sliver_sides;
         let e = energy(&s);
         rise = rise.max((e - e_prev) / e0);
         e_prev = e;
@@ -78,7 +80,7 @@ fn collide(dt: f64, h: f64) -> (f64, usize, f64, f64, f64) {
         }
     }
     assert_eq!(open_after, 5, "the discs did not separate within 2 ms");
-    ((v(&s, 1) - v(&s, 0)) / approach, in_contact, rise, (e0 - e_prev) / e0, drift)
+    ((v(&s, 1) - v(&s, 0)) / approach, in_contact, rise, (e0 - e_prev) / e0, drift, sliver)
 }
 
 /// The whole collision to separation (Neo-Hookean discs R = 4 mm, 2 m/s approach). Measured at
@@ -95,9 +97,9 @@ fn head_on_discs_separate_after_the_collision() {
     let runs: Vec<_> = [(1e-5, 1e-3), (5e-6, 1e-3), (2.5e-6, 1e-3), (5e-6, 5e-4)]
         .iter()
         .map(|&(dt, h)| {
-            let (e, n, rise, loss, drift) = collide(dt, h);
+            let (e, n, rise, loss, drift, sliver) = collide(dt, h);
             eprintln!(
-                "Δt {dt:e} s, h {h:e} m: restitution {e:.4}, contact {:.1} µs, energy lost {loss:.4}, largest rise {rise:.2e}, momentum drift {drift:.2e}",
+                "Δt {dt:e} s, h {h:e} m: restitution {e:.6}, contact {:.1} µs, energy lost {loss:.4}, largest rise {rise:.2e}, momentum drift {drift:.2e}, sliver contact sides {sliver}",
                 n as f64 * dt * 1e6
             );
             assert!(rise < 1e-12 && drift < 1e-12, "Δt {dt:e}, h {h:e}: energy rise {rise:.2e}, momentum drift {drift:.2e}");

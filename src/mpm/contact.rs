@@ -28,6 +28,7 @@
 
 use rayon::prelude::*;
 
+use super::contact_share::{contact_terms, is_sliver};
 use super::delassus::Delassus;
 use super::grid::{Grid, Vector};
 use super::implicit::{finish, prepare, solve, Body, DofState, StepOptions, Wall, Workspace};
@@ -85,6 +86,10 @@ pub struct ContactReport {
     /// Nodes carrying mass of two bodies, and how many of them push (r·n > 0).
     pub contact_nodes: usize,
     pub active_contacts: usize,
+    /// Contact-node sides at a sliver node of their body, acting through the material near the
+    /// node (`contact_share`): non-zero only in a step whose nodal contact did not converge and
+    /// was solved again that way.
+    pub sliver_sides: usize,
     /// Pairs of bodies with at least one pushing contact node (the contacts of the packing).
     pub touching_pairs: usize,
     /// Σ r·n over the body–body contact nodes (N, or N/m in 2-D).
@@ -98,9 +103,14 @@ pub struct ContactReport {
 pub(super) struct ContactNode<const D: usize> {
     pub(super) a: usize,
     pub(super) b: usize,
-    /// The node's active index in each body's workspace.
-    pub(super) na: usize,
-    pub(super) nb: usize,
+    /// Where the contact acts on each body: a range of `ContactWorkspace::terms`, (active node,
+    /// weight) pairs; the node itself with weight 1, or the material near a sliver node
+    /// (`contact_share`).
+    pub(super) ta: (usize, usize),
+    pub(super) tb: (usize, usize),
+    /// The node's index in each body's grid.
+    ia: usize,
+    ib: usize,
     /// Unit normal from A to B.
     pub(super) n: Vector<D>,
     /// Force on B (−r on A).
@@ -116,6 +126,7 @@ pub struct ContactWorkspace<const D: usize> {
     /// Per body, per dof: the wall friction force.
     wall_ft: Vec<Vec<f64>>,
     nodes: Vec<ContactNode<D>>,
+    terms: Vec<(usize, f64)>,
     delassus: Delassus<D>,
 }
 
@@ -182,13 +193,16 @@ pub fn step_bodies<const D: usize>(
 
     // Potential contact nodes: common-lattice nodes with mass of two bodies.
     cws.nodes.clear();
+    cws.terms.clear();
+    let max_mass: Vec<f64> =
+        cws.bodies.iter().map(|w| w.node_mass.iter().fold(0.0, |m: f64, &v| m.max(v))).collect();
     for a in 0..nb {
         let off_a = lattice_offset(&bodies[a].grid, &bodies[0].grid)?;
         for b in a + 1..nb {
             let off_b = lattice_offset(&bodies[b].grid, &bodies[0].grid)?;
             let (ga, gb) = (&bodies[a].grid, &bodies[b].grid);
             let npa_b = gb.nodes_per_axis();
-            for (na, &ia) in cws.bodies[a].active.iter().enumerate() {
+            for &ia in cws.bodies[a].active.iter() {
                 let ijk = ga.node_ijk(ia);
                 let mut local = [0usize; D];
                 let mut inside = true;
@@ -204,10 +218,9 @@ pub fn step_bodies<const D: usize>(
                     continue;
                 }
                 let ib = gb.node_index(local);
-                let nb_idx = cws.bodies[b].dof_of[ib];
                 // Both bodies must carry mass there (a massless active node has no inertia to
                 // exchange momentum with).
-                if nb_idx == usize::MAX
+                if cws.bodies[b].dof_of[ib] == usize::MAX
                     || cws.bodies[b].node_mass[ib] <= 0.0
                     || cws.bodies[a].node_mass[ia] <= 0.0
                 {
@@ -221,11 +234,16 @@ pub fn step_bodies<const D: usize>(
                         "step {step}: bodies {a} and {b} overlap at grid node {ia} of body {a} (no contact normal)"
                     ));
                 }
+                let start = cws.terms.len();
+                cws.terms.push((cws.bodies[a].dof_of[ia], 1.0));
+                cws.terms.push((cws.bodies[b].dof_of[ib], 1.0));
                 cws.nodes.push(ContactNode {
                     a,
                     b,
-                    na,
-                    nb: nb_idx,
+                    ta: (start, 1),
+                    tb: (start + 1, 1),
+                    ia,
+                    ib,
                     n: n.normalize(),
                     r: Vector::<D>::zeros(),
                 });
@@ -241,47 +259,87 @@ pub fn step_bodies<const D: usize>(
     };
     let limit = copt.tolerance * h;
     let mut converged = false;
-    for it in 1..=copt.max_iter {
-        report.iterations = it;
-        // Contact forces into Eq. 4 as external nodal forces, then each body's implicit solve.
-        for b in 0..nb {
-            let ws = &mut cws.bodies[b];
-            for k in 0..ws.fext.len() {
-                ws.fext[k] = ws.fbody[k] + cws.wall_ft[b][k];
+    // First every contact acts on its node. Where that has no fixed point the iterations cycle
+    // (a sliver node snapping between two states of its body, `contact_share`): the step is then
+    // solved again from the start with the contacts of the sliver nodes acting through the
+    // material near them.
+    for attempt in 0..2 {
+        if attempt == 1 {
+            cws.terms.clear();
+            for c in cws.nodes.iter_mut() {
+                c.r = Vector::<D>::zeros();
+                for (side, body, node) in [(&mut c.ta, c.a, c.ia), (&mut c.tb, c.b, c.ib)] {
+                    let start = cws.terms.len();
+                    let len = contact_terms(
+                        &cws.bodies[body],
+                        &bodies[body].points.mass,
+                        node,
+                        max_mass[body],
+                        &mut cws.terms,
+                    );
+                    report.sliver_sides += usize::from(is_sliver(&cws.bodies[body], node, max_mass[body]));
+                    *side = (start, len);
+                }
+            }
+            if report.sliver_sides == 0 {
+                break;
+            }
+            for ft in cws.wall_ft.iter_mut() {
+                ft.fill(0.0);
             }
         }
-        for c in &cws.nodes {
-            for d in 0..D {
-                cws.bodies[c.a].fext[c.na * D + d] -= c.r[d];
-                cws.bodies[c.b].fext[c.nb * D + d] += c.r[d];
+        for it in 1..=copt.max_iter {
+            report.iterations += 1;
+            // Contact forces into Eq. 4 as external nodal forces, then each body's implicit solve.
+            for b in 0..nb {
+                let ws = &mut cws.bodies[b];
+                for k in 0..ws.fext.len() {
+                    ws.fext[k] = ws.fbody[k] + cws.wall_ft[b][k];
+                }
+            }
+            for c in &cws.nodes {
+                for &(j, w) in &cws.terms[c.ta.0..c.ta.0 + c.ta.1] {
+                    for d in 0..D {
+                        cws.bodies[c.a].fext[j * D + d] -= w * c.r[d];
+                    }
+                }
+                for &(j, w) in &cws.terms[c.tb.0..c.tb.0 + c.tb.1] {
+                    for d in 0..D {
+                        cws.bodies[c.b].fext[j * D + d] += w * c.r[d];
+                    }
+                }
+            }
+            report.newton_iterations += bodies
+                .par_iter()
+                .zip(cws.bodies.par_iter_mut())
+                .map(|(body, ws)| solve(body, walls, opt, step, ws, it > 1).map(|r| r.iterations))
+                .collect::<Result<Vec<_>, String>>()?
+                .iter()
+                .sum::<usize>();
+            let corr = cws.delassus.update(
+                bodies,
+                walls,
+                opt,
+                copt,
+                step,
+                &mut cws.bodies,
+                &mut cws.nodes,
+                &cws.terms,
+                &mut cws.wall_ft,
+            )?;
+            report.correction = corr;
+            if corr <= limit {
+                converged = true;
+                break;
             }
         }
-        report.newton_iterations += bodies
-            .par_iter()
-            .zip(cws.bodies.par_iter_mut())
-            .map(|(body, ws)| solve(body, walls, opt, step, ws, it > 1).map(|r| r.iterations))
-            .collect::<Result<Vec<_>, String>>()?
-            .iter()
-            .sum::<usize>();
-        let corr = cws.delassus.update(
-            bodies,
-            walls,
-            opt,
-            copt,
-            step,
-            &mut cws.bodies,
-            &mut cws.nodes,
-            &mut cws.wall_ft,
-        )?;
-        report.correction = corr;
-        if corr <= limit {
-            converged = true;
+        if converged {
             break;
         }
     }
     if !converged {
         return Err(format!(
-            "step {step}: contact iterations did not converge in {} iterations: a force update still moves a node by {:.3e} m (criterion {:.1e} × h = {limit:.3e} m); reduce Δt",
+            "step {step}: contact iterations did not converge in {} iterations (also with the sliver nodes' contacts on their material): a force update still moves a node by {:.3e} m (criterion {:.1e} × h = {limit:.3e} m); reduce Δt",
             copt.max_iter, report.correction, copt.tolerance
         ));
     }

@@ -26,13 +26,22 @@ use super::contact::{project_disc, signorini_coulomb, ContactNode, ContactOption
 use super::grid::Vector;
 use super::implicit::{compliance, factorize, Body, DofState, StepOptions, Wall, Workspace};
 
+/// Where a link acts on one body: `len` (slot, weight) terms of `Delassus::terms` from `start`
+/// (one term of weight 1 but at a sliver node, `contact_share`).
+#[derive(Clone, Copy, Debug)]
+struct Side {
+    body: usize,
+    start: usize,
+    len: usize,
+}
+
 /// A contact of the linear problem: a body–body node or the tangential dofs of a node on a wall.
 #[derive(Clone, Copy, Debug)]
 struct Link<const D: usize> {
-    /// (body, slot) receiving −r; `None` for a wall.
-    a: Option<(usize, usize)>,
-    /// (body, slot) receiving +r.
-    b: (usize, usize),
+    /// The side receiving −r; `None` for a wall.
+    a: Option<Side>,
+    /// The side receiving +r.
+    b: Side,
     /// Body–body: the unit normal from A to B. Wall: the wall's axis (unit), along which r is zero,
     /// or zero for a node no longer on one wall (its force is removed).
     n: Vector<D>,
@@ -53,6 +62,8 @@ pub struct Delassus<const D: usize> {
     /// Per body: the contact nodes (active indices) and the slot of each active node.
     nodes: Vec<Vec<usize>>,
     slot_of: Vec<Vec<usize>>,
+    /// The (slot, weight) terms of the links' sides.
+    terms: Vec<(usize, f64)>,
     /// Per body: the compliance block over its contact dofs (row-major) and their displacements.
     comp: Vec<Vec<f64>>,
     u: Vec<Vec<f64>>,
@@ -82,10 +93,12 @@ impl<const D: usize> Delassus<D> {
         step: usize,
         ws: &mut [Workspace<D>],
         nodes: &mut [ContactNode<D>],
+        terms: &[(usize, f64)],
         wall_ft: &mut [Vec<f64>],
     ) -> Result<f64, String> {
         let nb = bodies.len();
         self.links.clear();
+        self.terms.clear();
         self.nodes.resize_with(nb, Vec::new);
         self.slot_of.resize_with(nb, Vec::new);
         for b in 0..nb {
@@ -94,11 +107,11 @@ impl<const D: usize> Delassus<D> {
             self.slot_of[b].resize(ws[b].active.len(), usize::MAX);
         }
         for c in nodes.iter() {
-            let sa = self.slot(c.a, c.na);
-            let sb = self.slot(c.b, c.nb);
+            let sa = self.side(c.a, &terms[c.ta.0..c.ta.0 + c.ta.1]);
+            let sb = self.side(c.b, &terms[c.tb.0..c.tb.0 + c.tb.1]);
             self.links.push(Link {
-                a: Some((c.a, sa)),
-                b: (c.b, sb),
+                a: Some(sa),
+                b: sb,
                 n: c.n,
                 friction: copt.body_friction,
                 w: Mat::<D>::zeros(),
@@ -134,10 +147,10 @@ impl<const D: usize> Delassus<D> {
                 if friction == 0.0 && r.norm() == 0.0 {
                     continue;
                 }
-                let s = self.slot(b, a);
+                let s = self.side(b, &[(a, 1.0)]);
                 self.links.push(Link {
                     a: None,
-                    b: (b, s),
+                    b: s,
                     n,
                     friction,
                     w: Mat::<D>::zeros(),
@@ -177,10 +190,11 @@ impl<const D: usize> Delassus<D> {
                 compliance(w, &dofs, comp);
                 Ok(())
             })?;
-        for l in self.links.iter_mut() {
-            let mut w = block(&self.comp[l.b.0], self.nodes[l.b.0].len(), l.b.1);
+        for c in 0..self.links.len() {
+            let l = self.links[c];
+            let mut w = self.block(l.b);
             match l.a {
-                Some((a, s)) => w += block(&self.comp[a], self.nodes[a].len(), s),
+                Some(a) => w += self.block(a),
                 None => {
                     // A wall: only the tangential dofs carry the friction force.
                     let p = Mat::<D>::identity() - l.n * l.n.transpose();
@@ -189,8 +203,8 @@ impl<const D: usize> Delassus<D> {
             }
             // Gershgorin bound of the largest eigenvalue: the update never overshoots.
             let lmax = (0..D).map(|i| (0..D).map(|j| w[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-            l.w = w;
-            l.k = if lmax > 0.0 { 1.0 / lmax } else { 0.0 };
+            self.links[c].w = w;
+            self.links[c].k = if lmax > 0.0 { 1.0 / lmax } else { 0.0 };
         }
 
         // Projected Gauss–Seidel on the linear model, to well below the outer tolerance.
@@ -202,10 +216,9 @@ impl<const D: usize> Delassus<D> {
                 if l.k == 0.0 {
                     continue;
                 }
-                let (b, sb) = l.b;
-                let mut g = Vector::<D>::from_fn(|d, _| self.u[b][sb * D + d]);
-                if let Some((a, sa)) = l.a {
-                    g -= Vector::<D>::from_fn(|d, _| self.u[a][sa * D + d]);
+                let mut g = self.displacement(l.b);
+                if let Some(a) = l.a {
+                    g -= self.displacement(a);
                 }
                 let new = if l.a.is_none() {
                     // The wall moves along its normal only: the tangential displacement is the slip.
@@ -220,9 +233,9 @@ impl<const D: usize> Delassus<D> {
                 }
                 change = change.max((l.w * dr).norm());
                 self.links[c].r = new;
-                self.apply(b, sb, dr);
-                if let Some((a, sa)) = l.a {
-                    self.apply(a, sa, -dr);
+                self.apply(l.b, dr);
+                if let Some(a) = l.a {
+                    self.apply(a, -dr);
                 }
             }
             if change <= tol {
@@ -235,6 +248,28 @@ impl<const D: usize> Delassus<D> {
         for l in &self.links {
             corr = corr.max((l.w * (l.r - l.r_used)).norm());
         }
+        if std::env::var_os("MCDEM_MPM_TRACE").is_some() {
+            let worst = (0..self.links.len())
+                .max_by(|&i, &j| {
+                    let c = |l: &Link<D>| (l.w * (l.r - l.r_used)).norm();
+                    c(&self.links[i]).total_cmp(&c(&self.links[j]))
+                })
+                .unwrap_or(0);
+            let l = self.links[worst];
+            let mass = |s: Side| {
+                let t = self.terms[s.start];
+                (s.body, s.len, ws[s.body].mass_dof[self.nodes[s.body][t.0] * D])
+            };
+            eprintln!(
+                "  step {step} contact: corr {corr:.3e} at link {worst} (body, terms, first mass) {:?} {:?} n {:?} r_used {:?} r {:?} W {:?}",
+                l.a.map(mass),
+                mass(l.b),
+                l.n.as_slice(),
+                l.r_used.as_slice(),
+                l.r.as_slice(),
+                l.w.as_slice()
+            );
+        }
         if corr <= copt.tolerance * bodies[0].grid.h {
             return Ok(corr);
         }
@@ -244,8 +279,8 @@ impl<const D: usize> Delassus<D> {
             i += 1;
         }
         for l in &self.links[i..] {
-            let (b, s) = l.b;
-            let a = self.nodes[b][s];
+            let b = l.b.body;
+            let a = self.nodes[b][self.terms[l.b.start].0];
             for d in 0..D {
                 wall_ft[b][a * D + d] = l.r[d];
             }
@@ -253,16 +288,55 @@ impl<const D: usize> Delassus<D> {
         Ok(corr)
     }
 
-    /// Moves body b's contact dofs by its compliance times the force change dr at slot s.
-    fn apply(&mut self, b: usize, s: usize, dr: Vector<D>) {
+    /// The side of a link on body b acting through the given (active node, weight) terms.
+    fn side(&mut self, body: usize, terms: &[(usize, f64)]) -> Side {
+        let start = self.terms.len();
+        for &(node, w) in terms {
+            let s = self.slot(body, node);
+            self.terms.push((s, w));
+        }
+        Side { body, start, len: terms.len() }
+    }
+
+    /// The local block Σ w_s w_t C_st of a side's terms in its body's compliance.
+    fn block(&self, side: Side) -> Mat<D> {
+        let m = self.nodes[side.body].len();
+        let comp = &self.comp[side.body];
+        let terms = &self.terms[side.start..side.start + side.len];
+        let mut out = Mat::<D>::zeros();
+        for &(s, ws) in terms {
+            for &(t, wt) in terms {
+                out += Mat::<D>::from_fn(|i, j| comp[(s * D + i) * (m * D) + t * D + j]) * (ws * wt);
+            }
+        }
+        out
+    }
+
+    /// The displacement Σ w_s u_s of a side over the step.
+    fn displacement(&self, side: Side) -> Vector<D> {
+        let u = &self.u[side.body];
+        let mut out = Vector::<D>::zeros();
+        for &(s, w) in &self.terms[side.start..side.start + side.len] {
+            out += Vector::<D>::from_fn(|d, _| u[s * D + d]) * w;
+        }
+        out
+    }
+
+    /// Moves a side's body's contact dofs by its compliance times the force change dr spread over
+    /// the side's terms.
+    fn apply(&mut self, side: Side, dr: Vector<D>) {
+        let b = side.body;
         let m = self.nodes[b].len() * D;
         let comp = &self.comp[b];
-        for (row, u) in self.u[b].iter_mut().enumerate() {
-            let mut du = 0.0;
-            for j in 0..D {
-                du += comp[row * m + s * D + j] * dr[j];
+        for &(s, w) in &self.terms[side.start..side.start + side.len] {
+            let f = dr * w;
+            for (row, u) in self.u[b].iter_mut().enumerate() {
+                let mut du = 0.0;
+                for j in 0..D {
+                    du += comp[row * m + s * D + j] * f[j];
+                }
+                *u += du;
             }
-            *u += du;
         }
     }
 }
@@ -271,8 +345,3 @@ impl<const D: usize> Delassus<D> {
 /// contact nodes of body b; the cap is reached only when the linear problem is nearly singular,
 /// and the outer loop then goes on from the forces reached.
 const MAX_SWEEPS: usize = 20_000;
-
-/// The D×D diagonal block of slot s in a row-major compliance over m slots.
-fn block<const D: usize>(comp: &[f64], m: usize, s: usize) -> Mat<D> {
-    Mat::<D>::from_fn(|i, j| comp[(s * D + i) * (m * D) + s * D + j])
-}

@@ -15,6 +15,7 @@ pub mod cli;
 pub mod compaction;
 pub mod constitutive;
 pub mod contact;
+mod contact_share;
 mod delassus;
 mod fbar;
 pub mod grid;
