@@ -72,6 +72,17 @@ impl Deck {
         self.world.reported_box = Some((lo, hi));
     }
 
+    /// The box, the model and the engine set up for the particles there are now (at the start of
+    /// a run, and after an insertion inside one).
+    fn set_up_world(&mut self) -> R<()> {
+        self.shrink_wrap();
+        self.prepare()?;
+        for wmsg in self.world.setup()? {
+            self.warn(&wmsg);
+        }
+        Ok(())
+    }
+
     pub(super) fn run(&mut self, a: &[&str]) -> R<()> {
         if a.len() < 2 {
             return Err("run: missing N".into());
@@ -91,12 +102,7 @@ impl Deck {
             n as u64
         };
         self.insert_pending()?;
-        self.shrink_wrap();
-        self.prepare()?;
-        let warnings = self.world.setup()?;
-        for wmsg in warnings {
-            self.warn(&wmsg);
-        }
+        self.set_up_world()?;
         // As in LIGGGHTS, the setup of a run is an end of step for the averaging fixes.
         self.sample_ave_times()?;
         self.say("Setting up run ...");
@@ -138,11 +144,7 @@ impl Deck {
             // An `insert_every N` insertion: the new particles enter as at the start of a run
             // (box, lists and forces set up again), without a new thermo header.
             if self.step_inserts() && self.insert_due()? {
-                self.shrink_wrap();
-                self.prepare()?;
-                for wmsg in self.world.setup()? {
-                    self.warn(&wmsg);
-                }
+                self.set_up_world()?;
             }
             let policy = &self.lost_policy;
             self.world.step().map_err(|e| {

@@ -67,11 +67,7 @@ impl World {
             let i = c.p as usize;
             let delta = self.p.radius[i] - (self.p.x[i] - c.point).norm();
             if delta > 0.0 {
-                let wt = match &self.walls[c.wall as usize].geom {
-                    WallGeom::Plane(pl) => pl.wall_type,
-                    WallGeom::Cylinder(cy) => cy.wall_type,
-                    WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
-                };
+                let wt = self.walls[c.wall as usize].geom.wall_type(&self.meshes, c.mesh);
                 let co = &self.coeffs[self.p.typ[i] * nt + wt];
                 e += 0.4 * crate::physics::hertz::hertz_force(co.e_star, self.p.radius[i], delta) * delta;
             }

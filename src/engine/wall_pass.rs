@@ -279,11 +279,7 @@ impl WallCtx<'_> {
     }
 
     pub(super) fn coeff(&self, c: &WallContact) -> &PairCoeffs {
-        let wall_type = match &self.walls[c.wall as usize].geom {
-            WallGeom::Plane(pl) => pl.wall_type,
-            WallGeom::Cylinder(cy) => cy.wall_type,
-            WallGeom::Meshes(_) => self.meshes[c.mesh as usize].wall_type,
-        };
+        let wall_type = self.walls[c.wall as usize].geom.wall_type(self.meshes, c.mesh);
         &self.coeffs[self.typ[c.p as usize] * self.nt + wall_type]
     }
 

@@ -52,3 +52,15 @@ pub struct WallFix {
     pub name: String,
     pub geom: WallGeom,
 }
+
+impl WallGeom {
+    /// The 0-based atom type of the wall element a contact touches: the primitive's own, or that
+    /// of mesh `mesh` (an index into `meshes`).
+    pub(super) fn wall_type(&self, meshes: &[super::Mesh], mesh: u32) -> usize {
+        match self {
+            WallGeom::Plane(pl) => pl.wall_type,
+            WallGeom::Cylinder(cy) => cy.wall_type,
+            WallGeom::Meshes(_) => meshes[mesh as usize].wall_type,
+        }
+    }
+}

@@ -220,21 +220,19 @@ fn journal_fits(nus: &[f64], journal: &Path, say: &dyn Fn(&str)) -> Result<Vec<F
         Err(e) => return Err(format!("cannot read {}: {e}", journal.display())),
     };
     let whole = text.rfind('\n').map_or(0, |i| i + 1);
-    if whole < text.len() {
-        let torn = &text[whole..];
-        if serde_json::from_str::<Fit>(torn).is_err() {
-            say(&format!(
-                "{}:{}: an unfinished last line (a run stopped while writing it) is dropped",
-                journal.display(),
-                text[..whole].lines().count() + 1
-            ));
-            std::fs::write(journal, &text[..whole])
-                .map_err(|e| format!("cannot write {}: {e}", journal.display()))?;
-            return journal_fits(nus, journal, say);
-        }
+    let torn = whole < text.len() && serde_json::from_str::<Fit>(&text[whole..]).is_err();
+    if torn {
+        say(&format!(
+            "{}:{}: an unfinished last line (a run stopped while writing it) is dropped",
+            journal.display(),
+            text[..whole].lines().count() + 1
+        ));
+        std::fs::write(journal, &text[..whole])
+            .map_err(|e| format!("cannot write {}: {e}", journal.display()))?;
     }
+    let kept = if torn { &text[..whole] } else { &text[..] };
     let mut fits = Vec::new();
-    for (i, l) in text.lines().enumerate() {
+    for (i, l) in kept.lines().enumerate() {
         if l.trim().is_empty() {
             continue;
         }
