@@ -188,6 +188,7 @@ fn coeffs(c: &mcdem_pair_coeffs) -> Result<PairCoeffs, FfiError> {
         beta: c.beta,
         friction: c.friction,
         tangential: crate::physics::hertz::Tangential::History,
+        normal: crate::physics::NormalLaw::Hertz,
         damping_ratio_t_n: c.damping_ratio_t_n,
     })
 }

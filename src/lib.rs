@@ -24,3 +24,4 @@ pub mod rng;
 pub mod study;
 pub mod team;
 pub mod validate;
+pub mod vtk_legacy;

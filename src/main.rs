@@ -131,6 +131,10 @@ enum Command {
         /// Output directory (history.csv, points.csv, PNG charts)
         #[arg(long, default_value = "mpm_out")]
         out: PathBuf,
+        /// Write VTK snapshots of the points and walls every N steps into OUT/vtk (ParaView: open
+        /// vtk/points.vtk.series)
+        #[arg(long, value_name = "N")]
+        vtk_every: Option<usize>,
     },
     /// Finite-element continuum reference: one sphere between rigid frictionless walls (JSON scene, see src/fem/scene.rs)
     Continuum {
@@ -555,7 +559,7 @@ fn main() -> ExitCode {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)
         }
         Command::Study { study: s } => study(s),
-        Command::Mpm { scene, out } => mcdem::mpm::cli::run(&scene, &out),
+        Command::Mpm { scene, out, vtk_every } => mcdem::mpm::cli::run(&scene, &out, vtk_every),
         Command::Continuum { scene, out } => mcdem::fem::scene::run(&scene, &out),
         // Its own exit statuses (0 agree, 1 differ, 2 unreadable input): see docs/compare.md.
         Command::Compare(args) => return mcdem::compare::cli(&args),

@@ -22,6 +22,8 @@ const COMMANDS: &[(&str, Handler)] = &[
     ("group", Deck::group),
     ("create_box", create_box),
     ("read_data", read_data),
+    ("read_restart", Deck::read_restart),
+    ("write_restart", Deck::write_restart),
     ("create_atoms", Deck::create_atoms),
     ("set", Deck::set),
     ("velocity", Deck::velocity),

@@ -1,4 +1,4 @@
-//! `dump custom|local|custom/vtk|mesh/vtk`, `dump_modify`, and writing the frames due at a step.
+//! `dump custom|local|custom/vtk|mesh/vtk|mesh/stl`, `dump_modify`, and writing the frames due at a step.
 
 use super::*;
 
@@ -9,6 +9,19 @@ impl Deck {
         }
         match a[3] {
             "custom/vtk" | "mesh/vtk" => return self.dump_vtk(a),
+            "mesh/stl" => {
+                if a.len() < 6 {
+                    return Err("dump mesh/stl: expected N FILE [mesh fix IDs]".into());
+                }
+                let every = int(a[4])?;
+                if every <= 0 {
+                    return Err("dump: N must be > 0".into());
+                }
+                let all = self.world.meshes.len();
+                let d = vtk::VtkDump::stl(a[1], every as u64, a[5], &a[6..], |f| self.mesh_index(f), all)?;
+                self.vtk_dumps.push(d);
+                return Ok(());
+            }
             "custom" => {}
             "local" => {
                 self.groups.act_on(a[2], &format!("dump {} {}", a[1], a[3]))?;

@@ -64,6 +64,13 @@ impl Quotes {
 impl Deck {
     pub(super) fn execute(&mut self, text: &str, path: &Path) -> R<()> {
         let fname = path.display().to_string();
+        let outer = std::mem::replace(&mut self.file, fname.clone());
+        let r = self.execute_lines(text, &fname);
+        self.file = outer;
+        r
+    }
+
+    fn execute_lines(&mut self, text: &str, fname: &str) -> R<()> {
         if let Some((line, what)) = scope::out_of_scope(text) {
             return Err(format!("{fname}:{line}: {what}"));
         }

@@ -17,6 +17,7 @@ mod local;
 pub mod output;
 mod pair;
 mod regions;
+mod restart;
 mod run;
 mod scope;
 mod thermo;
@@ -148,6 +149,8 @@ enum FixKind {
     Deform,
     /// `insert/pack`: `unfix` drops its insertions not yet done.
     Insert,
+    /// `check/timestep/gran`: index into `Deck::checks`.
+    CheckTimestep(usize),
 }
 
 #[derive(Debug, Clone)]
@@ -196,6 +199,8 @@ struct Deck {
     vtk_dumps: Vec<vtk::VtkDump>,
     pair_locals: HashMap<String, local::PairLocal>,
     aves: Vec<Option<AveTime>>,
+    /// `fix check/timestep/gran` (`None` after `unfix`).
+    checks: Vec<Option<fixes::check_timestep::CheckTimestep>>,
     progress: bool,
     quiet: bool,
     /// Multi-contact approximations given on the command line (they override the deck's; 0: none).
@@ -203,6 +208,8 @@ struct Deck {
     cli_mc_every: u64,
     summary: RunSummary,
     line_no: usize,
+    /// The deck file being read (for `FILE:LINE` in warnings).
+    file: String,
     scratch: Vec<f64>,
     /// Label a `jump SELF LABEL` asked for: the running file continues after it.
     pending_jump: Option<String>,
@@ -279,12 +286,14 @@ impl Deck {
             vtk_dumps: Vec::new(),
             pair_locals: HashMap::new(),
             aves: Vec::new(),
+            checks: Vec::new(),
             progress: opts.progress,
             quiet: opts.quiet,
             cli_geometry_tolerance: opts.mc_geometry_tolerance,
             cli_mc_every: opts.mc_every,
             summary: RunSummary::default(),
             line_no: 0,
+            file: String::new(),
             scratch: Vec::new(),
             pending_jump: None,
             skip_jump: false,
@@ -310,6 +319,12 @@ impl Deck {
             println!("{m}");
         }
         self.logln(&m);
+    }
+
+    /// A warning about the command being run, as `WARNING: FILE:LINE: message`.
+    fn warn_here(&mut self, s: &str) {
+        let m = format!("{}:{}: {s}", self.file, self.line_no);
+        self.warn(&m);
     }
 
     fn finish(&mut self) {

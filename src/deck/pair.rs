@@ -9,6 +9,8 @@ use super::*;
 pub(super) enum NormalModel {
     /// `model hertz`: LIGGGHTS' Hertz law (Hertz–Mindlin with damping).
     Hertz,
+    /// `model hooke`: LIGGGHTS' linear spring-dashpot fitted to Hertz at `characteristicVelocity`.
+    Hooke,
     /// `model mc_advanced`: the advanced multi-contact law (Ghods et al. 2022, Eqs. 2–3).
     McAdvanced,
 }
@@ -18,8 +20,9 @@ impl std::str::FromStr for NormalModel {
     fn from_str(s: &str) -> R<Self> {
         match s {
             "hertz" => Ok(NormalModel::Hertz),
+            "hooke" => Ok(NormalModel::Hooke),
             "mc_advanced" => Ok(NormalModel::McAdvanced),
-            other => Err(unsupported(&format!("granular model '{other}' (hertz or mc_advanced)"))),
+            other => Err(unsupported(&format!("granular model '{other}' (hertz, hooke or mc_advanced)"))),
         }
     }
 }
@@ -46,6 +49,21 @@ pub(super) struct GranModel {
     pub(super) geometry_tolerance: Option<f64>,
     /// `updateEvery K` (mc_advanced): see `World::mc_every`.
     pub(super) update_every: Option<u64>,
+    /// `tangential_damping on|off` (on by default, as in LIGGGHTS); off only with model hooke.
+    pub(super) tangential_damping: bool,
+    /// `limitForce on|off` (model hooke; off by default).
+    pub(super) limit_force: bool,
+    /// `ktToKnUser on|off` (model hooke; off by default).
+    pub(super) kt_to_kn: bool,
+}
+
+/// An `on|off` value of a model option.
+fn on_off(key: &str, x: &str) -> R<bool> {
+    match x {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("{key} must be 'on' or 'off', got '{x}'")),
+    }
 }
 
 impl GranModel {
@@ -61,8 +79,14 @@ impl GranModel {
             ("pairRadii", Some(x)) => {
                 return Err(format!("pairRadii must be 'modified' or 'stock', got '{x}'"))
             }
-            // LIGGGHTS' default for hertz; the core always applies tangential damping.
-            ("tangential_damping", Some("on")) => {}
+            ("tangential_damping", Some(x)) => self.tangential_damping = on_off(key, x)?,
+            ("limitForce", Some(x)) => self.limit_force = on_off(key, x)?,
+            ("ktToKnUser", Some(x)) => self.kt_to_kn = on_off(key, x)?,
+            // LIGGGHTS' default; `viscous on` (hooke's Stokes-number restitution) is not modelled.
+            ("viscous", Some("off")) => {}
+            ("viscous", Some("on")) => {
+                return Err(unsupported("viscous on (the Stokes-number restitution of model hooke)"))
+            }
             _ => return Ok(false),
         }
         Ok(true)
@@ -71,7 +95,11 @@ impl GranModel {
     /// The combination is one the engines run, and every setting belongs to the chosen model.
     pub(super) fn check(&self) -> R<()> {
         let advanced = match self.model {
-            None => return Err("pair_style gran: 'model hertz' or 'model mc_advanced' is required".into()),
+            None => {
+                return Err(
+                    "pair_style gran: 'model hertz', 'model hooke' or 'model mc_advanced' is required".into(),
+                )
+            }
             Some(m) => m == NormalModel::McAdvanced,
         };
         if self.stock_pair_radii && !advanced {
@@ -82,6 +110,26 @@ impl GranModel {
         }
         if self.update_every.is_some() && !advanced {
             return Err("updateEvery is a setting of model mc_advanced".into());
+        }
+        let hooke = self.model == Some(NormalModel::Hooke);
+        if !hooke {
+            for (on, what) in [
+                (!self.tangential_damping, "tangential_damping off"),
+                (self.limit_force, "limitForce on"),
+                (self.kt_to_kn, "ktToKnUser on"),
+            ] {
+                if on {
+                    return Err(unsupported(&format!(
+                        "{what} with model {} (model hooke only)",
+                        self.name()
+                    )));
+                }
+            }
+        }
+        if hooke && self.surface_mc {
+            return Err(
+                "model hooke has no multi-contact form: drop 'surface multicontact' (it goes with model hertz)".into(),
+            );
         }
         if advanced && self.surface_mc {
             return Err("mc_advanced is itself a multi-contact model: drop 'surface multicontact'".into());
@@ -94,10 +142,22 @@ impl GranModel {
         self.model == Some(NormalModel::McAdvanced)
     }
 
+    /// The model is `hooke`.
+    pub(super) fn is_hooke(&self) -> bool {
+        self.model == Some(NormalModel::Hooke)
+    }
+
+    /// The `model hooke` options compared between a wall and the pair style: (tangential_damping,
+    /// limitForce, ktToKnUser).
+    pub(super) fn hooke_options(&self) -> (bool, bool, bool) {
+        (self.tangential_damping, self.limit_force, self.kt_to_kn)
+    }
+
     /// The model's deck name, for messages.
     pub(super) fn name(&self) -> &'static str {
         match self.model {
             Some(NormalModel::Hertz) => "hertz",
+            Some(NormalModel::Hooke) => "hooke",
             Some(NormalModel::McAdvanced) => "mc_advanced",
             None => "(none)",
         }
@@ -137,6 +197,9 @@ impl Deck {
             stock_pair_radii: false,
             geometry_tolerance: None,
             update_every: None,
+            tangential_damping: true,
+            limit_force: false,
+            kt_to_kn: false,
         };
         let mut k = start;
         while k < a.len() {
@@ -182,6 +245,19 @@ impl Deck {
         self.world.mc_every = if cli_every > 0 { cli_every } else { m.update_every.unwrap_or(1) };
         self.pair = Some(m);
         Ok(())
+    }
+
+    /// `fix property/global characteristicVelocity scalar V`, which `model hooke` needs.
+    fn characteristic_velocity(&self) -> R<f64> {
+        const NAME: &str = "characteristicVelocity";
+        let (style, v) = self.props.get(NAME).ok_or_else(|| {
+            format!("fix property/global {NAME} is missing (model hooke needs 'fix ID all property/global {NAME} scalar V')")
+        })?;
+        match (style.as_str(), v.as_slice()) {
+            ("scalar", &[x]) if x.is_finite() && x > 0.0 => Ok(x),
+            ("scalar", _) => Err(format!("property {NAME} must be one number > 0")),
+            _ => Err(format!("property {NAME} must be scalar")),
+        }
     }
 
     pub(super) fn prepare(&mut self) -> R<()> {
@@ -240,6 +316,9 @@ impl Deck {
             );
         }
         self.world.set_materials(mats, &rest, &fric, pair.tangential)?;
+        if pair.is_hooke() {
+            self.world.use_hooke(self.characteristic_velocity()?, &rest, pair.hooke_options())?;
+        }
         self.world.closure = Some(closure);
         self.world.liggghts_radii = pair.surface_mc || pair.stock_pair_radii;
         self.world.mc_range =

@@ -5,6 +5,7 @@ use super::*;
 impl Deck {
     pub(super) fn end_of_step_outputs(&mut self, last: bool) -> R<Option<String>> {
         let step = self.world.step;
+        self.check_timesteps();
         self.sample_ave_times()?;
         self.write_dumps()?;
         let thermo_due = last || (self.thermo_every > 0 && step % self.thermo_every == 0);
@@ -155,6 +156,7 @@ impl Deck {
                 self.instability = Some(e);
                 m
             })?;
+            self.stream_release();
             self.shrink_wrap();
             let last = self.world.step == end;
             if let Some(line) = self.end_of_step_outputs(last)? {

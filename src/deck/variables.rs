@@ -128,6 +128,9 @@ impl Deck {
                     .as_ref()
                     .and_then(|a| a.last.get(k - 1).copied())
                     .ok_or_else(|| format!("fix {id} has no value {k}")),
+                (Some(FixKind::CheckTimestep(c)), Some(k @ 1..=3)) => {
+                    Ok(self.checks[c].as_ref().map_or(0.0, |c| c.values[k - 1]))
+                }
                 (Some(_), _) => Err(unsupported(&format!("fix reference f_{f}"))),
                 (None, _) => Err(format!("unknown fix {id}")),
             };

@@ -1,7 +1,7 @@
 //! Observables read between steps: energies, the Eq. 4 stress, contact counts (coordination), the
 //! touching contacts and the per-face mesh forces.
 
-use crate::physics::Vec3;
+use crate::physics::{NormalLaw, Vec3};
 
 use super::contacts::PairContact;
 use super::pair_eval::PairCtx;
@@ -42,8 +42,9 @@ impl World {
                 .sum::<f64>()
     }
 
-    /// Elastic energy stored in the contacts, Σ (2/5) k_n δ² (Hertz potential, undamped part).
-    /// Used by the energy-conservation checks; exact for Hertz without multi-contact.
+    /// Elastic energy stored in the contacts, Σ (2/5) k_n δ² (Hertz potential, undamped part;
+    /// ½ k_n δ² under `model hooke`). Used by the energy-conservation checks; exact without
+    /// multi-contact.
     pub fn elastic_energy(&self) -> f64 {
         let domain = match self.domain {
             Some(d) => d,
@@ -60,7 +61,8 @@ impl World {
             if delta > 0.0 {
                 let c = &self.coeffs[self.p.typ[i] * nt + self.p.typ[j]];
                 let reff = ri * rj / (ri + rj);
-                e += 0.4 * crate::physics::hertz::hertz_force(c.e_star, reff, delta) * delta;
+                let (mi, mj) = (self.p.mass[i], self.p.mass[j]);
+                e += stored_energy(c, reff, mi * mj / (mi + mj), delta);
             }
         }
         for c in &self.contacts.wc {
@@ -69,7 +71,7 @@ impl World {
             if delta > 0.0 {
                 let wt = self.walls[c.wall as usize].geom.wall_type(&self.meshes, c.mesh);
                 let co = &self.coeffs[self.p.typ[i] * nt + wt];
-                e += 0.4 * crate::physics::hertz::hertz_force(co.e_star, self.p.radius[i], delta) * delta;
+                e += stored_energy(co, self.p.radius[i], self.p.mass[i], delta);
             }
         }
         e
@@ -154,6 +156,16 @@ pub(super) fn add_outer(s: &mut [[f64; 3]; 3], u: &Vec3, w: &Vec3) {
     for (row, ua) in s.iter_mut().zip(u.iter()) {
         for (sab, wb) in row.iter_mut().zip(w.iter()) {
             *sab += ua * wb;
+        }
+    }
+}
+
+/// Elastic energy of one contact of overlap `delta` > 0 under the pair's normal law.
+fn stored_energy(c: &crate::physics::PairCoeffs, reff: f64, meff: f64, delta: f64) -> f64 {
+    match &c.normal {
+        NormalLaw::Hertz => 0.4 * crate::physics::hertz::hertz_force(c.e_star, reff, delta) * delta,
+        NormalLaw::Hooke(h) => {
+            0.5 * crate::physics::hooke::normal(c.e_star, h, delta, reff, meff, 0.0).elastic * delta
         }
     }
 }

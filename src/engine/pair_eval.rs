@@ -5,7 +5,7 @@ use crate::physics::pair::{particle_particle, Body, ContactError, PairLanes, LAN
 use crate::physics::{PairCoeffs, Vec3};
 
 use super::contacts::{contact_error, Pair, PairDr, PairHist, RECEIVER_GAP};
-use super::sinks::PairSink;
+use super::sinks::{PairOut, PairSink};
 use super::{Domain, Particles, StepError};
 
 /// Read-only view of the state that one pair evaluation needs (shared between threads).
@@ -37,17 +37,6 @@ impl<'a> PairCtx<'a> {
         let dt = if update { dt } else { 0.0 };
         PairCtx { p, coeffs, nt, domain, dt, update, step, liggghts_radii }
     }
-}
-
-/// One pair's contribution: force on i, torques on i and j, when touching. Written in place by
-/// [`PairCtx::eval`] (a returned tuple travels through memory on every pair, and reading it back
-/// stalled the serial loop).
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct PairOut {
-    pub(super) touching: bool,
-    pub(super) force: Vec3,
-    pub(super) torque_i: Vec3,
-    pub(super) torque_j: Vec3,
 }
 
 impl PairCtx<'_> {

@@ -3,12 +3,12 @@
 
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::PairLanes;
-use crate::physics::Vec3;
+use crate::physics::{NormalLaw, Vec3};
 use crate::team::SplitMut;
 
 use super::blocks::{BALANCE_PASSES, MAX_PAIR_BLOCKS, MIN_BLOCK_PAIRS};
-use super::pair_eval::{PairCtx, PairOut};
-use super::sinks::{Keep, OwnedSums, SharedSums, SumInto};
+use super::pair_eval::PairCtx;
+use super::sinks::{Keep, OwnedSums, PairOut, SharedSums, SumInto};
 use super::{StepError, World};
 
 /// Buffers of the pair pass, kept between steps (no allocation in the loop).
@@ -61,11 +61,11 @@ impl World {
     }
 
     /// Whether the pair and wall passes evaluate in vectorised batches: they evaluate `tangential
-    /// history` with the radii of docs/spec.md §2; the LIGGGHTS `surface multicontact` radii and
-    /// `no_history` take the pair-by-pair path.
+    /// history` and the Hertz law with the radii of docs/spec.md §2; the LIGGGHTS `surface
+    /// multicontact` radii, `no_history` and `model hooke` take the pair-by-pair path.
     pub(super) fn batched(&self) -> bool {
         !self.liggghts_radii
-            && self.coeffs.iter().all(|c| c.tangential == Tangential::History)
+            && self.coeffs.iter().all(|c| c.tangential == Tangential::History && c.normal == NormalLaw::Hertz)
             && PairLanes::vectorised()
     }
 

@@ -4,8 +4,18 @@
 use crate::physics::Vec3;
 
 use super::contacts::PairContact;
-use super::pair_eval::PairOut;
 use super::Domain;
+
+/// One pair's contribution: force on i, torques on i and j, when touching. Written in place by
+/// `PairCtx::eval` (a returned tuple travels through memory on every pair, and reading it back
+/// stalled the serial loop).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct PairOut {
+    pub(super) touching: bool,
+    pub(super) force: Vec3,
+    pub(super) torque_i: Vec3,
+    pub(super) torque_j: Vec3,
+}
 
 /// Where [`PairCtx::eval_batched`] puts each pair's result. A trait rather than a closure so the
 /// call is inlined into the batch loop (a closure stayed an out-of-line call: 15 % of a Hertz step).

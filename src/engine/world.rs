@@ -159,10 +159,12 @@ impl World {
         let mut worst: Option<(f64, usize)> = None;
         for i in 0..n {
             let m = &self.materials[self.p.typ[i]];
-            let nu = m.poisson_ratio;
-            let g = m.youngs_modulus / (2.0 * (1.0 + nu));
-            let t_r = std::f64::consts::PI * self.p.radius[i] * (self.p.density[i] / g).sqrt()
-                / (0.1631 * nu + 0.8766);
+            let t_r = crate::physics::timestep::rayleigh_time(
+                self.p.radius[i],
+                self.p.density[i],
+                m.youngs_modulus,
+                m.poisson_ratio,
+            );
             if worst.is_none_or(|(t, _)| t_r < t) {
                 worst = Some((t_r, i));
             }
@@ -293,6 +295,24 @@ impl World {
         self.ntypes = nt;
         self.materials = materials;
         self.coeffs = coeffs;
+        Ok(())
+    }
+
+    /// Switches every type pair set by [`World::set_materials`] to LIGGGHTS' `model hooke` with
+    /// characteristic velocity `char_vel` [m/s]; `restitution` is the same table as there,
+    /// `options` (tangential_damping, limitForce, ktToKnUser).
+    pub fn use_hooke(
+        &mut self,
+        char_vel: f64,
+        restitution: &[f64],
+        options: (bool, bool, bool),
+    ) -> Result<(), String> {
+        if restitution.len() != self.coeffs.len() {
+            return Err(format!("peratomtypepair tables must have {0}×{0} entries", self.ntypes));
+        }
+        for (c, &e) in self.coeffs.iter_mut().zip(restitution) {
+            *c = c.with_hooke(char_vel, e, options).map_err(|e| e.to_string())?;
+        }
         Ok(())
     }
 }

@@ -1,5 +1,6 @@
-//! `mcdem mpm SCENE [--out DIR]`: runs a scene and writes `history.csv`, `bodies.csv` (centre and
-//! velocity of every body), `points.csv` (final material points) and PNG charts into DIR.
+//! `mcdem mpm SCENE [--out DIR] [--vtk-every N]`: runs a scene and writes `history.csv`,
+//! `bodies.csv` (centre and velocity of every body), `points.csv` (final material points), PNG
+//! charts and, with `--vtk-every`, VTK snapshots (`vtk/`, see [`super::vtk`]) into DIR.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -7,10 +8,11 @@ use std::time::Instant;
 
 use super::compaction::{box_walls, wall_pair, CompactionLog};
 use super::constitutive::{inverse, Constitutive, Law, Mat};
-use super::contact::{step_bodies, ContactWorkspace};
+use super::contact::{step_bodies_cut, ContactWorkspace};
 use super::grid::Vector;
 use super::points::Points;
 use super::scene::Scene;
+use super::vtk::Snapshots;
 use crate::harness::plot::{draw, Chart, Series};
 
 /// Plane-strain effective modulus E* = E/(1 − ν²) = 4μ(λ + μ)/(λ + 2μ) of Eq. 19.
@@ -40,20 +42,27 @@ pub fn mean_strain_stress<const D: usize>(points: &Points<D>, law: &Law) -> (f64
     (g / v, s / v)
 }
 
-/// Runs the scene at `path`, writing into `out`.
-pub fn run(path: &Path, out: &Path) -> Result<(), String> {
+/// Runs the scene at `path`, writing into `out`; `vtk_every`: VTK snapshots every this many steps.
+pub fn run(path: &Path, out: &Path, vtk_every: Option<usize>) -> Result<(), String> {
+    if vtk_every == Some(0) {
+        return Err("--vtk-every must be at least 1 (a snapshot every N steps), got 0".into());
+    }
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let scene = Scene::from_json(&text)?;
     match scene.dimension {
-        2 => run_d::<2>(&scene, out),
-        3 => run_d::<3>(&scene, out),
+        2 => run_d::<2>(&scene, out, vtk_every),
+        3 => run_d::<3>(&scene, out, vtk_every),
         d => Err(format!("scene: dimension must be 2 or 3, got {d}")),
     }
 }
 
-fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
+fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) -> Result<(), String> {
     let mut setup = scene.setup::<D>()?;
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let mut vtk = vtk_every.map(|n| Snapshots::new(out, n)).transpose()?;
+    if let Some(v) = vtk.as_mut() {
+        v.write(0, 0.0, &setup.bodies, &setup.walls, &[])?;
+    }
     let (lambda, mu) = setup.bodies[0].law.lame();
     let a = D - 1;
     // Plate pair along the last axis (bottom side +1, top side −1), if the scene has one.
@@ -71,25 +80,57 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
         _ => None,
     };
     let started = Instant::now();
+    // Steps done and the time left, on a terminal as a bar, elsewhere a line every 10 s.
+    let progress = crate::harness::progress::Progress::new("mpm", 1);
+    progress.start("steps");
     let mut total_iters = 0;
+    let mut cut_steps = 0usize;
     let mut failure = None;
     for k in 0..scene.steps {
-        let rep =
-            match step_bodies(&mut setup.bodies, &setup.walls, &setup.options, &setup.contact, k, &mut ws) {
-                Ok(r) => r,
-                Err(e) => {
-                    // Keep what was computed: the history up to the failed step is written first.
-                    failure = Some(e);
-                    break;
-                }
-            };
+        let (rep, substeps) = match step_bodies_cut(
+            &mut setup.bodies,
+            &mut setup.walls,
+            &setup.options,
+            &setup.contact,
+            k,
+            &mut ws,
+            setup.step_cuts,
+        ) {
+            Ok(r) => r,
+            Err(e) => {
+                // Keep what was computed: the history up to the failed step is written first.
+                failure = Some(e);
+                break;
+            }
+        };
+        progress.fraction("steps", (k + 1) as f64 / scene.steps as f64);
+        // Solid filling more than the box is impossible: past Φ = 1 material lies beyond the walls
+        // or bodies overlap, a limit of contacts and walls acting on grid nodes (up to half a
+        // cell of a body's material can lie past them), so the run stops there.
+        if let Some(c) = compaction.as_ref() {
+            let phi = c.phi(&setup.bodies, &setup.walls);
+            if phi > 1.0 {
+                failure = Some(format!(
+                    "step {}: the solid fraction Φ = {phi:.4} exceeds 1: material lies past the walls or bodies overlap; contacts and walls act on grid nodes, so this is the resolution's limit (h = {:.3e} m), not the material's; results up to the previous step are kept",
+                    k + 1,
+                    setup.bodies[0].grid.h
+                ));
+                break;
+            }
+        }
+        if substeps > 1 {
+            cut_steps += 1;
+            eprintln!("mpm: step {k} did not converge with Δt; taken as {substeps} sub-steps");
+        }
         total_iters += rep.newton_iterations;
-        for w in setup.walls.iter_mut() {
-            w.position += w.velocity * setup.options.dt;
+        if let Some(v) = vtk.as_mut().filter(|v| v.due(k + 1, scene.steps)) {
+            let t = (k + 1) as f64 * setup.options.dt;
+            v.write(k + 1, t, &setup.bodies, &setup.walls, &rep.wall_load)?;
         }
         if (k + 1) % scene.output_every != 0 && k + 1 != scene.steps {
             continue;
         }
+        progress.detail("steps", "step", format!("step {} of {}", k + 1, scene.steps));
         if let Some(c) = compaction.as_mut() {
             c.record(k + 1, (k + 1) as f64 * setup.options.dt, &setup.bodies, &setup.walls, &rep);
         }
@@ -148,6 +189,8 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
             sg.push((-gp, -sm));
         }
     }
+    progress.finish("steps");
+    drop(progress);
     let wall = started.elapsed().as_secs_f64();
     std::fs::write(out.join("history.csv"), csv).map_err(|e| format!("cannot write history.csv: {e}"))?;
     std::fs::write(out.join("bodies.csv"), bcsv).map_err(|e| format!("cannot write bodies.csv: {e}"))?;
@@ -155,7 +198,7 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
         std::fs::write(out.join("packing.csv"), &c.csv)
             .map_err(|e| format!("cannot write packing.csv: {e}"))?;
     }
-    let mut pts = String::from("body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy\n");
+    let mut pts = String::from("body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy,volume\n");
     let mut snap = Vec::new();
     let mut n_points = 0;
     for (body_idx, body) in setup.bodies.iter().enumerate() {
@@ -170,13 +213,14 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
             let s = b.sigma[p];
             let _ = writeln!(
                 pts,
-                "{body_idx},{:.9e},{:.9e},{z:.9e},{:.9e},{:.9e},{:.9e},{:.9e}",
+                "{body_idx},{:.9e},{:.9e},{z:.9e},{:.9e},{:.9e},{:.9e},{:.9e},{:.9e}",
                 x[0],
                 x[1],
                 b.vol[p] / b.vol0[p],
                 s[(0, 0)],
                 s[(1, 1)],
-                s[(0, 1)]
+                s[(0, 1)],
+                b.vol[p]
             );
         }
     }
@@ -228,7 +272,7 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path) -> Result<(), String> {
         return Err(format!("{e} (history up to the previous step written to {})", out.display()));
     }
     eprintln!(
-        "mpm: {} steps, {} points, {} Newton iterations, {wall:.2} s wall time; outputs in {}",
+        "mpm: {} steps ({cut_steps} of them cut into sub-steps), {} points, {} Newton iterations, {wall:.2} s wall time; outputs in {}",
         scene.steps,
         n_points,
         total_iters,

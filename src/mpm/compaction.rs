@@ -85,6 +85,12 @@ impl<const D: usize> CompactionLog<D> {
     }
 
     /// One row at the end of a step (walls already moved to the step's end).
+    /// Φ: the bodies' solid volume over the box's (area in 2-D).
+    pub fn phi(&self, bodies: &[Body<D>], walls: &[Wall]) -> f64 {
+        let extent = |d: usize| walls[self.walls[d].1].position - walls[self.walls[d].0].position;
+        solid_volume(bodies) / (0..D).map(extent).product::<f64>()
+    }
+
     pub fn record(
         &mut self,
         step: usize,

@@ -28,49 +28,12 @@
 
 use rayon::prelude::*;
 
+use super::contact_law::ContactNode;
+pub use super::contact_law::{signorini_coulomb, ContactOptions};
 use super::contact_share::{contact_terms, is_sliver};
 use super::delassus::Delassus;
 use super::grid::{Grid, Vector};
 use super::implicit::{finish, prepare, solve, Body, DofState, StepOptions, Wall, Workspace};
-
-/// Friction coefficients and the stop rule of the contact iterations.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ContactOptions {
-    /// Coulomb coefficient between a body and a wall (≥ 0).
-    pub wall_friction: f64,
-    /// Coulomb coefficient between two bodies (≥ 0).
-    pub body_friction: f64,
-    /// Converged when the largest change of a nodal relative displacement over the step caused by
-    /// a force update is below `tolerance` × h.
-    pub tolerance: f64,
-    pub max_iter: usize,
-}
-
-impl Default for ContactOptions {
-    fn default() -> Self {
-        // 1e-7 of a cell per step is far below the contact's own discretisation error (one cell,
-        // Section 2.2); with the bodies' compliances it is reached in 5–15 re-solves (measured on
-        // colliding discs and on a block sliding under friction).
-        Self { wall_friction: 0.0, body_friction: 0.0, tolerance: 1e-7, max_iter: 500 }
-    }
-}
-
-impl ContactOptions {
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, mu) in [("wall_friction", self.wall_friction), ("body_friction", self.body_friction)] {
-            if !(mu.is_finite() && mu >= 0.0) {
-                return Err(format!("contact: {name} must be a finite friction coefficient ≥ 0, got {mu}"));
-            }
-        }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) || self.max_iter == 0 {
-            return Err(format!(
-                "contact: tolerance must be positive and max_iter at least 1 (got {}, {})",
-                self.tolerance, self.max_iter
-            ));
-        }
-        Ok(())
-    }
-}
 
 /// What one multi-body step reports.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -96,25 +59,6 @@ pub struct ContactReport {
     pub contact_normal_force: f64,
     /// The last iteration's largest change of a nodal relative displacement [m].
     pub correction: f64,
-}
-
-/// A node of the common grid carrying mass of bodies `a` and `b` (a < b).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct ContactNode<const D: usize> {
-    pub(super) a: usize,
-    pub(super) b: usize,
-    /// Where the contact acts on each body: a range of `ContactWorkspace::terms`, (active node,
-    /// weight) pairs; the node itself with weight 1, or the material near a sliver node
-    /// (`contact_share`).
-    pub(super) ta: (usize, usize),
-    pub(super) tb: (usize, usize),
-    /// The node's index in each body's grid.
-    ia: usize,
-    ib: usize,
-    /// Unit normal from A to B.
-    pub(super) n: Vector<D>,
-    /// Force on B (−r on A).
-    pub(super) r: Vector<D>,
 }
 
 /// Buffers of the multi-body step, kept between steps.
@@ -156,8 +100,96 @@ pub fn step_bodies<const D: usize>(
     step: usize,
     cws: &mut ContactWorkspace<D>,
 ) -> Result<ContactReport, String> {
+    try_step(bodies, walls, opt, copt, step, cws).map_err(|f| f.message)
+}
+
+/// What a step that did not converge reports: its message, and whether the points had already
+/// moved (a point inverted in the final update), after which the step cannot be taken again.
+struct StepFailure {
+    message: String,
+    points_moved: bool,
+}
+
+impl From<String> for StepFailure {
+    fn from(message: String) -> Self {
+        Self { message, points_moved: false }
+    }
+}
+
+/// One step of Δt with the walls moved to t + Δt after it, cut into two steps of Δt/2 (each cut
+/// again, at most `cuts` times) where it does not converge: the usual remedy of implicit codes
+/// when Newton or the contact iterations fail, since a shorter step raises every node's inertia
+/// term M/Δt² against the stiffness and the contact forces, and shortens the motion the
+/// linearisation must cover. A step that converges is exactly `step_bodies` followed by the wall
+/// motion, so scenes that never fail give the same numbers with or without cuts. Returns the
+/// report of the step's last sub-step, its iteration counts summed over the sub-steps, and the
+/// number of sub-steps taken (1 when the step was not cut).
+pub fn step_bodies_cut<const D: usize>(
+    bodies: &mut [Body<D>],
+    walls: &mut [Wall],
+    opt: &StepOptions,
+    copt: &ContactOptions,
+    step: usize,
+    cws: &mut ContactWorkspace<D>,
+    cuts: u32,
+) -> Result<(ContactReport, usize), String> {
+    cut_step(bodies, walls, opt, copt, step, cws, cuts, 0)
+}
+
+/// `step_bodies_cut` at `depth` cuts below the whole step, with `cuts` more allowed.
+#[allow(clippy::too_many_arguments)]
+fn cut_step<const D: usize>(
+    bodies: &mut [Body<D>],
+    walls: &mut [Wall],
+    opt: &StepOptions,
+    copt: &ContactOptions,
+    step: usize,
+    cws: &mut ContactWorkspace<D>,
+    cuts: u32,
+    depth: u32,
+) -> Result<(ContactReport, usize), String> {
+    match try_step(bodies, walls, opt, copt, step, cws) {
+        Ok(r) => {
+            for w in walls.iter_mut() {
+                w.position += w.velocity * opt.dt;
+            }
+            Ok((r, 1))
+        }
+        Err(f) if cuts > 0 && !f.points_moved => {
+            // The points are as they were before the step (a failed attempt moves none), so the
+            // step can be taken again in two halves. Allocates only on this rare path.
+            let start: Vec<f64> = walls.iter().map(|w| w.position).collect();
+            let half = StepOptions { dt: 0.5 * opt.dt, ..*opt };
+            let (r1, n1) = cut_step(bodies, walls, &half, copt, step, cws, cuts - 1, depth + 1)?;
+            let (mut r2, n2) = cut_step(bodies, walls, &half, copt, step, cws, cuts - 1, depth + 1)?;
+            // The walls end where an uncut step would have put them, to the last bit.
+            for (w, s) in walls.iter_mut().zip(start) {
+                w.position = s + w.velocity * opt.dt;
+            }
+            r2.iterations += r1.iterations;
+            r2.newton_iterations += r1.newton_iterations;
+            r2.sliver_sides += r1.sliver_sides;
+            Ok((r2, n1 + n2))
+        }
+        Err(f) if depth == 0 => Err(f.message),
+        // Name the sub-step that failed (the step number is that of the whole step).
+        Err(f) => Err(format!(
+            "{} (in a sub-step of Δt = {:.3e} s, the step cut in halves {depth} times)",
+            f.message, opt.dt
+        )),
+    }
+}
+
+fn try_step<const D: usize>(
+    bodies: &mut [Body<D>],
+    walls: &[Wall],
+    opt: &StepOptions,
+    copt: &ContactOptions,
+    step: usize,
+    cws: &mut ContactWorkspace<D>,
+) -> Result<ContactReport, StepFailure> {
     let nb = bodies.len();
-    let h = bodies.first().ok_or("contact: no body")?.grid.h;
+    let h = bodies.first().ok_or_else(|| String::from("contact: no body"))?.grid.h;
     cws.bodies.resize_with(nb, Workspace::default);
     cws.mass_grad.resize_with(nb, Vec::new);
     cws.wall_ft.resize_with(nb, Vec::new);
@@ -232,7 +264,7 @@ pub fn step_bodies<const D: usize>(
                 if n.norm() == 0.0 {
                     return Err(format!(
                         "step {step}: bodies {a} and {b} overlap at grid node {ia} of body {a} (no contact normal)"
-                    ));
+                    ).into());
                 }
                 let start = cws.terms.len();
                 cws.terms.push((cws.bodies[a].dof_of[ia], 1.0));
@@ -341,7 +373,7 @@ pub fn step_bodies<const D: usize>(
         return Err(format!(
             "step {step}: contact iterations did not converge in {} iterations (also with the sliver nodes' contacts on their material): a force update still moves a node by {:.3e} m (criterion {:.1e} × h = {limit:.3e} m); reduce Δt",
             copt.max_iter, report.correction, copt.tolerance
-        ));
+        ).into());
     }
     // The last solve is within the tolerance of the final forces: report its loads, move points.
     for b in 0..nb {
@@ -375,68 +407,7 @@ pub fn step_bodies<const D: usize>(
     bodies
         .par_iter_mut()
         .zip(cws.bodies.par_iter())
-        .try_for_each(|(body, ws)| finish(body, opt, step, ws))?;
+        .try_for_each(|(body, ws)| finish(body, opt, step, ws))
+        .map_err(|message| StepFailure { message, points_moved: true })?;
     Ok(report)
-}
-
-/// Eqs. 6–7 intersected with the Signorini and Coulomb graphs (Nezamabadi et al. 2019, Section
-/// 2.2, Fig. 2) at one node: from the force r⁰ on B and the step's relative displacement g = u_B − u_A
-/// obtained with it, the linear relation r = r⁰ − k g with k = m_red/Δt² gives the force that
-/// would stop the relative motion; its normal part is kept if it pushes (else the node opens,
-/// r = 0), its tangential part is projected onto the Coulomb disc |r_t| ≤ μ r_n. At a fixed point
-/// r_n > 0 ⇒ g_n = 0 and r_n = 0 ⇒ g_n ≥ 0 (Signorini); |r_t| < μ r_n ⇒ g_t = 0 (stick), else g_t
-/// is opposite to r_t (sliding resisted).
-pub fn signorini_coulomb<const D: usize>(
-    r0: Vector<D>,
-    g: Vector<D>,
-    n: Vector<D>,
-    k: f64,
-    mu: f64,
-) -> Vector<D> {
-    let trial = r0 - g * k;
-    let rn = trial.dot(&n);
-    if rn <= 0.0 {
-        return Vector::<D>::zeros();
-    }
-    let rt = trial - n * rn;
-    n * rn + project_disc(rt, mu * rn)
-}
-
-/// The vector v scaled back onto the ball of the given radius when it lies outside.
-pub(super) fn project_disc<const D: usize>(v: Vector<D>, radius: f64) -> Vector<D> {
-    let l = v.norm();
-    if l > radius {
-        if radius > 0.0 {
-            v * (radius / l)
-        } else {
-            Vector::<D>::zeros()
-        }
-    } else {
-        v
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The fixed points of the node update are the Signorini–Coulomb solutions.
-    #[test]
-    fn node_update_satisfies_signorini_and_coulomb() {
-        let n = Vector::<2>::new(0.6, 0.8);
-        let t = Vector::<2>::new(-0.8, 0.6);
-        let k = 2.0;
-        // Approaching and sliding fast: pushes, friction at the cone's edge, opposite to the slip.
-        let r = signorini_coulomb(Vector::<2>::zeros(), -n * 1.0 + t * 3.0, n, k, 0.5);
-        assert!((r.dot(&n) - 2.0).abs() < 1e-14);
-        assert!((r.dot(&t) + 1.0).abs() < 1e-14);
-        // Approaching, slow slip: sticks (the whole slip is cancelled).
-        let r = signorini_coulomb(Vector::<2>::zeros(), -n * 1.0 + t * 0.1, n, k, 0.5);
-        assert!((r.dot(&t) + 0.2).abs() < 1e-14);
-        // Separating: no force.
-        assert_eq!(signorini_coulomb(n * 0.3, n * 1.0, n, k, 0.5), Vector::<2>::zeros());
-        // μ = 0: no tangential force at all.
-        let r = signorini_coulomb(Vector::<2>::zeros(), -n + t, n, k, 0.0);
-        assert!(r.dot(&t).abs() < 1e-15);
-    }
 }

@@ -22,7 +22,7 @@
 use rayon::prelude::*;
 
 use super::constitutive::Mat;
-use super::contact::{project_disc, signorini_coulomb, ContactNode, ContactOptions};
+use super::contact_law::{project_disc, signorini_coulomb, ContactNode, ContactOptions};
 use super::grid::Vector;
 use super::implicit::{compliance, factorize, Body, DofState, StepOptions, Wall, Workspace};
 

@@ -6,7 +6,8 @@
 //! - [`grid`]: the regular background grid, multilinear shape functions, one code for D = 2, 3;
 //! - [`points`]: material points and their seeding;
 //! - [`implicit`]: the implicit step (Eqs. 4, 5, 10–16, App. A) with rigid frictionless walls;
-//! - [`scene`], [`cli`]: JSON scenes and the `mcdem mpm` command (CSV and PNG outputs).
+//! - [`scene`], [`cli`]: JSON scenes and the `mcdem mpm` command (CSV and PNG outputs);
+//! - [`vtk`]: VTK snapshots of a run for ParaView (`--vtk-every`).
 
 // The tensor and grid loops index several arrays with the same indices, written as in the equations.
 #![allow(clippy::needless_range_loop)]
@@ -15,6 +16,7 @@ pub mod cli;
 pub mod compaction;
 pub mod constitutive;
 pub mod contact;
+mod contact_law;
 mod contact_share;
 mod delassus;
 mod fbar;
@@ -23,3 +25,4 @@ pub mod implicit;
 pub mod packing;
 pub mod points;
 pub mod scene;
+pub mod vtk;

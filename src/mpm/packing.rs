@@ -9,7 +9,6 @@
 
 use serde::Deserialize;
 
-use super::scene::BodySpec;
 use crate::rng::SplitMix64;
 
 #[derive(Clone, Debug, Deserialize)]
@@ -38,8 +37,8 @@ fn seed() -> u64 {
 const TRIES: usize = 200_000;
 
 impl PackingSpec {
-    /// The particles as disc bodies, or an error naming what cannot be met.
-    pub fn bodies(&self, dim: usize) -> Result<Vec<BodySpec>, String> {
+    /// The particles' centres and radii, or an error naming what cannot be met.
+    pub fn discs(&self, dim: usize) -> Result<Vec<(Vec<f64>, f64)>, String> {
         let [d0, d1] = self.diameter;
         if !(d0.is_finite() && d0 > 0.0 && d1 >= d0) {
             return Err(format!(
@@ -93,10 +92,7 @@ impl PackingSpec {
             })?;
             placed.push((c, r));
         }
-        Ok(placed
-            .into_iter()
-            .map(|(center, radius)| BodySpec::Disc { center, radius, velocity: Vec::new() })
-            .collect())
+        Ok(placed)
     }
 }
 
@@ -143,6 +139,6 @@ mod tests {
             gap: 0.0,
             seed: 7,
         };
-        assert_eq!(p.bodies(2).unwrap().len(), 1);
+        assert_eq!(p.discs(2).unwrap().len(), 1);
     }
 }

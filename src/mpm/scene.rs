@@ -50,6 +50,10 @@ pub struct Scene {
     /// Contact Dynamics between bodies and with the walls (friction, stop rule).
     #[serde(default)]
     pub contact: Option<ContactSpec>,
+    /// A step that does not converge is taken again as two steps of Δt/2, each cut again if it
+    /// fails, at most this many times (Δt/16 by default; 0: a failed step stops the run).
+    #[serde(default = "four")]
+    pub step_cuts: u32,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -71,6 +75,10 @@ pub struct ContactSpec {
 fn one() -> usize {
     1
 }
+fn four() -> u32 {
+    4
+}
+
 fn one_f() -> f64 {
     1.0
 }
@@ -151,6 +159,8 @@ pub struct Setup<const D: usize> {
     pub walls: Vec<Wall>,
     pub options: StepOptions,
     pub contact: ContactOptions,
+    /// See `Scene::step_cuts`.
+    pub step_cuts: u32,
 }
 
 impl Scene {
@@ -195,7 +205,11 @@ impl Scene {
             return Err(format!("flip must lie in [0, 1], got {}", self.flip));
         }
         let generated = match &self.packing {
-            Some(p) if self.body.is_none() && self.bodies.is_none() => p.bodies(D)?,
+            Some(p) if self.body.is_none() && self.bodies.is_none() => p
+                .discs(D)?
+                .into_iter()
+                .map(|(center, radius)| BodySpec::Disc { center, radius, velocity: Vec::new() })
+                .collect(),
             Some(_) => return Err("scene: give one of \"body\", \"bodies\" or \"packing\", not both".into()),
             None => Vec::new(),
         };
@@ -328,11 +342,18 @@ impl Scene {
             contact.max_iter = c.max_iter.unwrap_or(contact.max_iter);
         }
         contact.validate()?;
+        if self.step_cuts > 20 {
+            return Err(format!(
+                "step_cuts must be at most 20 (a step of Δt/2^20 is round-off for any scene), got {}",
+                self.step_cuts
+            ));
+        }
         Ok(Setup {
             bodies,
             walls,
             options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip, locking },
             contact,
+            step_cuts: self.step_cuts,
         })
     }
 }

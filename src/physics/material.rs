@@ -106,6 +106,32 @@ pub enum Tangential {
     NoHistory,
 }
 
+/// Parameters of LIGGGHTS' `model hooke` for one type pair (the law is [`super::hooke::normal`]).
+/// Kept here with the pair coefficients that carry it, as [`Tangential`] is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hooke {
+    /// `characteristicVelocity` V [m/s], the impact speed the linear stiffness is fitted to, > 0.
+    pub char_vel: f64,
+    /// ln e of the pair's coefficient of restitution (LIGGGHTS' `coeffRestLog`).
+    pub ln_e: f64,
+    /// `tangential_damping on` (LIGGGHTS' default): γ_t = γ_n; off: γ_t = 0.
+    pub tangential_damping: bool,
+    /// `limitForce on`: a negative (attractive) normal force is set to zero. Default off.
+    pub limit_force: bool,
+    /// `ktToKnUser on`: k_t = (2/7) k_n instead of k_t = k_n. Default off.
+    pub kt_to_kn: bool,
+}
+
+/// The normal contact law of a type pair.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum NormalLaw {
+    /// Hertz with viscous damping ([`super::hertz::normal`]).
+    #[default]
+    Hertz,
+    /// LIGGGHTS' linear spring-dashpot `model hooke` ([`super::hooke::normal`]).
+    Hooke(Hooke),
+}
+
 /// Coefficients of one type pair, precomputed once (App. C, Eqs. C.3, C.4, C.8).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairCoeffs {
@@ -119,6 +145,8 @@ pub struct PairCoeffs {
     pub friction: f64,
     /// Tangential sub-model (history unless the deck asks for `no_history`).
     pub tangential: Tangential,
+    /// Normal law (Hertz unless the deck asks for `model hooke`).
+    pub normal: NormalLaw,
     /// γ_t / γ_n = √(S_t / S_n) = √(4 G* / E*): a property of the pair of materials, so the
     /// tangential damping costs a product per contact instead of a square root. Derived: build
     /// with [`PairCoeffs::new`] or [`PairCoeffs::from_moduli`].
@@ -144,6 +172,30 @@ impl PairCoeffs {
 
     /// From the effective moduli directly (the C ABI passes them); fills the derived ratio.
     pub fn from_moduli(e_star: f64, g_star: f64, beta: f64, friction: f64, tangential: Tangential) -> Self {
-        Self { e_star, g_star, beta, friction, tangential, damping_ratio_t_n: (4.0 * g_star / e_star).sqrt() }
+        Self {
+            e_star,
+            g_star,
+            beta,
+            friction,
+            tangential,
+            normal: NormalLaw::Hertz,
+            damping_ratio_t_n: (4.0 * g_star / e_star).sqrt(),
+        }
+    }
+
+    /// The same pair under `model hooke` with characteristic velocity `char_vel` [m/s] > 0 and the
+    /// pair's coefficient of restitution e ∈ (0, 1]; `options` is (tangential_damping,
+    /// limitForce, ktToKnUser).
+    pub fn with_hooke(
+        self,
+        char_vel: f64,
+        restitution: f64,
+        (tangential_damping, limit_force, kt_to_kn): (bool, bool, bool),
+    ) -> Result<Self, MaterialError> {
+        let v = check("characteristicVelocity", char_vel, "finite and > 0", |v| v > 0.0)?;
+        let e =
+            check("coefficientRestitution", restitution, "finite and in (0, 1]", |v| v > 0.0 && v <= 1.0)?;
+        let h = Hooke { char_vel: v, ln_e: e.ln(), tangential_damping, limit_force, kt_to_kn };
+        Ok(Self { normal: NormalLaw::Hooke(h), ..self })
     }
 }

@@ -5,6 +5,8 @@
 //! citation is:
 //! - [`hertz`]: Hertz normal force with viscous damping and the history tangential force
 //!   (Ghods et al. 2022, App. C; identical to LIGGGHTS `hertz tangential history`).
+//! - [`hooke`]: LIGGGHTS' linear `model hooke` (normal_model_hooke.h), with the same tangential
+//!   sub-models.
 //! - [`brodu2015`]: the standard multi-contact displacement (Brodu et al. 2015; Ghods et al. Eq. 2).
 //! - [`ghods2022`]: the advanced multi-contact switch (Ghods et al. Eq. 3 and App. A).
 //! - [`contact_set`]: the per-particle kernel that applies Eq. 2 (and Eq. 3) to all contacts of one particle.
@@ -17,9 +19,11 @@ pub mod brodu2015;
 pub mod contact_set;
 pub mod ghods2022;
 pub mod hertz;
+pub mod hooke;
 pub mod lanes;
 pub mod material;
 pub mod pair;
+pub mod timestep;
 
 /// Whether this CPU has AVX2. The compiler vectorises loops with square roots and divisions only
 /// under AVX2's cost model, not under the x86-64 baseline's; the batch of pair forces is therefore
@@ -52,4 +56,4 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use contact_set::{ContactLoad, ContactSetKernel, McParams};
 pub use ghods2022::{Cap, MprTest};
-pub use material::{Material, MaterialError, PairCoeffs};
+pub use material::{Hooke, Material, MaterialError, NormalLaw, PairCoeffs};

@@ -1,12 +1,13 @@
 //! One contact, particle–particle or particle–wall: the geometry is computed once (normal, overlap
 //! with the multi-contact radii, relative velocities), then the normal and tangential sub-models
-//! of [`super::hertz`] read it. Same operations, same order as LIGGGHTS `surface default` +
+//! of [`super::hertz`] (or [`super::hooke`]) read it. Same operations, same order as LIGGGHTS `surface default` +
 //! `hertz` + `tangential history`, so both engines agree to round-off.
 
 use std::fmt;
 
 use super::hertz::{self, NormalForce, Tangential};
-use super::material::PairCoeffs;
+use super::hooke;
+use super::material::{NormalLaw, PairCoeffs};
 use super::Vec3;
 
 /// Kinematic state of one spherical body.
@@ -105,7 +106,10 @@ struct Geometry {
 #[inline(always)]
 fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3) -> ContactForce {
     let vn = g.vr.dot(&g.en);
-    let normal = hertz::normal(c, g.overlap, g.reff, g.meff, vn);
+    let normal = match &c.normal {
+        NormalLaw::Hertz => hertz::normal(c, g.overlap, g.reff, g.meff, vn),
+        NormalLaw::Hooke(h) => hooke::normal(c.e_star, h, g.overlap, g.reff, g.meff, vn),
+    };
     let mut force_i = g.en * normal.force;
     let (mut torque_i, mut torque_j) = (Vec3::zeros(), Vec3::zeros());
     if c.friction > 0.0 {
@@ -327,7 +331,8 @@ pub struct CoeffLanes {
 }
 
 impl CoeffLanes {
-    /// Gives lane `l` the coefficients `c` (whose tangential model must be `history`).
+    /// Gives lane `l` the coefficients `c` (whose tangential model must be `history` and normal
+    /// law Hertz: the batches are Hertz only).
     #[inline(always)]
     pub fn set(&mut self, l: usize, c: &PairCoeffs) {
         self.e_star[l] = c.e_star;
@@ -345,6 +350,7 @@ impl CoeffLanes {
             beta: self.beta[l],
             friction: self.friction[l],
             tangential: Tangential::History,
+            normal: NormalLaw::Hertz,
             damping_ratio_t_n: self.damping_ratio_t_n[l],
         }
     }

@@ -13,8 +13,11 @@
 
 use std::fmt::Write as _;
 
-use super::die::Curve;
 use crate::harness::runner;
+
+/// A curve of the die: (displacement / r, plate stress [Pa], side-wall stress [Pa]), for the
+/// references here and the models of `die`.
+pub(super) type Curve = Vec<(f64, f64, f64)>;
 
 /// One reference curve: material law, Poisson ratio and file name, with its points.
 pub struct Reference {

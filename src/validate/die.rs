@@ -12,6 +12,7 @@ use std::fmt::Write as _;
 
 use serde_json::json;
 
+use super::continuum::Curve;
 use super::{CaseResult, ModelSummary, Options, Row, Target};
 use crate::harness::runner::{self, DeckRun};
 use crate::nonlocal::scene::Scene;
@@ -82,9 +83,6 @@ fn bcc() -> Die {
         centres,
     }
 }
-
-/// A curve: (displacement / r, plate stress [Pa], side-wall stress [Pa]).
-pub(super) type Curve = Vec<(f64, f64, f64)>;
 
 struct DemModel {
     name: &'static str,

@@ -1,4 +1,4 @@
-/* Compiled against native/mcdem.h and linked with libmcdem.a by tests/c_abi.rs: if the header and
+/* Compiled against native/mcdem.h and linked with libmcdem.a by tests/physics/c_abi.rs: if the header and
  * the library drift apart (names, argument lists, struct layouts), this stops compiling, linking
  * or printing the values the Rust side expects. Prints "key value" lines. */
 #include <stdio.h>

@@ -25,7 +25,7 @@ So the two unknowns P_v, P_h satisfy
 
 with h(P) = [3 P / (4 E* sqrt r)]^(2/3), solved here by Newton's method with the analytic
 Jacobian to 1e-14 relative. Nothing is imported from mcdem: the test
-`tests/nonlocal.rs::die_table_script_reproduces_the_committed_table` runs this script and compares
+`tests/reference/nonlocal.rs::die_table_script_reproduces_the_committed_table` runs this script and compares
 its output with the committed CSV, and `die_table_boussinesq` checks the solver against the CSV.
 
 Usage: python3 validation/reference/die_single_boussinesq.py   (prints the CSV to stdout)

@@ -4,8 +4,8 @@
 //!
 //! Placement is random rejection sampling from the fix's seed, sequential and so the same on any
 //! thread count. Larger particles are placed first (as LIGGGHTS does: they are the hardest to fit).
-//! A target the region cannot hold stops the run with an error instead of LIGGGHTS' warning and
-//! short insertion: a packing with fewer particles than the deck asks for is a different packing.
+//! A target the region cannot hold is, as in LIGGGHTS, a warning (`Less insertions than
+//! requested`, with the deck's FILE:LINE) and a short insertion: the run goes on with what fitted.
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -22,10 +22,18 @@ pub(in crate::deck) struct Insertion {
     pending: Vec<Pack>,
     /// `insert_every N` insertions: each with the step of its next insertion.
     periodic: Vec<(Pack, u64)>,
+    /// `fix insert/stream` insertions.
+    pub(super) streams: Vec<super::stream::Stream>,
+}
+
+impl Insertion {
+    pub(super) fn has_distribution(&self, id: &str) -> bool {
+        self.distributions.contains_key(id)
+    }
 }
 
 #[derive(Debug, Clone)]
-struct Template {
+pub(super) struct Template {
     /// 0-based atom type.
     typ: usize,
     density: f64,
@@ -110,11 +118,21 @@ struct Pack {
 
 /// A seed as LIGGGHTS asks for it (a whole number; LIGGGHTS wants a prime > 10000, which only
 /// matters to its own generator).
-fn seed(s: &str, what: &str) -> R<u64> {
+pub(super) fn seed(s: &str, what: &str) -> R<u64> {
     s.parse::<u64>().map_err(|_| format!("{what}: seed must be a whole number >= 0, got '{s}'"))
 }
 
-fn positive(s: &str, what: &str) -> R<f64> {
+/// `random_distribute exact|uncorrelated` of the insertion fixes: whether each insertion holds the
+/// distribution's exact proportions.
+pub(super) fn random_distribute(v: &str, what: &str) -> R<bool> {
+    match v {
+        "exact" => Ok(true),
+        "uncorrelated" => Ok(false),
+        _ => Err(format!("{what}: random_distribute must be exact or uncorrelated, got '{v}'")),
+    }
+}
+
+pub(super) fn positive(s: &str, what: &str) -> R<f64> {
     let v = num(s)?;
     if !(v > 0.0 && v.is_finite()) {
         return Err(format!("{what} must be > 0, got {s}"));
@@ -300,17 +318,7 @@ impl Deck {
                 "overlapcheck" if v == "yes" => {}
                 "overlapcheck" => return Err(unsupported(&format!("{what}: overlapcheck {v} (only yes)"))),
                 "all_in" => all_in = yes_no(v, "all_in")?,
-                "random_distribute" => {
-                    exact = match v {
-                        "exact" => true,
-                        "uncorrelated" => false,
-                        _ => {
-                            return Err(format!(
-                                "{what}: random_distribute must be exact or uncorrelated, got '{v}'"
-                            ))
-                        }
-                    }
-                }
+                "random_distribute" => exact = random_distribute(v, &what)?,
                 "maxattempt" => {
                     let m = int(v)?;
                     if m < 1 {
@@ -390,56 +398,71 @@ impl Deck {
             p.round += 1;
             *due = next + p.every.unwrap_or(u64::MAX);
         }
+        added |= self.stream_due()?;
         Ok(added)
     }
 
     /// Whether an `insert_every N` insertion is active (checked before each step).
     pub(in crate::deck) fn step_inserts(&self) -> bool {
-        !self.insertion.periodic.is_empty()
+        !self.insertion.periodic.is_empty() || !self.insertion.streams.is_empty()
     }
 
     /// Whether an insertion fix will still add particles (a group defined now misses them).
     pub(in crate::deck) fn inserts_later(&self) -> bool {
-        !self.insertion.pending.is_empty() || !self.insertion.periodic.is_empty()
+        !self.insertion.pending.is_empty()
+            || !self.insertion.periodic.is_empty()
+            || !self.insertion.streams.is_empty()
     }
 
     /// `unfix` of an insertion fix: its insertions not yet done are dropped.
     pub(in crate::deck) fn stop_inserting(&mut self, fix: &str) {
         self.insertion.pending.retain(|p| p.fix != fix);
         self.insertion.periodic.retain(|(p, _)| p.fix != fix);
+        self.insertion.streams.retain(|s| s.fix != fix);
     }
 
-    fn insert(&mut self, pack: &Pack) -> R<usize> {
-        let dom = self.world.domain.ok_or("insertion before the simulation box exists")?;
-        let (lo, hi) = pack.region.bounds();
-        if (0..3).any(|k| lo[k] < dom.lo[k] || hi[k] > dom.hi[k]) {
-            return Err("the region reaches outside the simulation box".into());
+    /// Mean particle volume and mass of a distribution (number fractions over template means).
+    pub(super) fn distribution_means(&self, dist: &str) -> (f64, f64) {
+        let dist = &self.insertion.distributions[dist];
+        let mut m = (0.0, 0.0);
+        for (id, f) in &dist.parts {
+            let t = &self.insertion.templates[id];
+            m.0 += f * t.mean_volume();
+            m.1 += f * t.density * t.mean_volume();
         }
-        let dist = &self.insertion.distributions[&pack.dist];
+        m
+    }
+
+    /// The largest radius a distribution can draw (mean + 3σ for a gaussian).
+    pub(super) fn distribution_max_radius(&self, dist: &str) -> f64 {
+        let dist = &self.insertion.distributions[dist];
+        dist.parts
+            .iter()
+            .map(|(id, _)| match self.insertion.templates[id].radius {
+                Radius::Constant(r) => r,
+                Radius::Uniform(_, b) => b,
+                Radius::Gaussian(mu, s) => mu + 3.0 * s,
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The particles of one insertion of `n` from distribution `dist`: the templates and, per
+    /// particle, its radius and template index, largest first. `exact`: template shares by
+    /// largest remainders, else each particle's template drawn on its own.
+    pub(super) fn draw_batch(
+        &self,
+        dist: &str,
+        n: usize,
+        seed: u64,
+        exact: bool,
+    ) -> (Vec<Template>, Vec<(f64, usize)>) {
+        let dist = &self.insertion.distributions[dist];
         let templates: Vec<Template> =
             dist.parts.iter().map(|(id, _)| self.insertion.templates[id].clone()).collect();
         let frac: Vec<f64> = dist.parts.iter().map(|p| p.1).collect();
-        // What is already in the region counts towards the target.
-        let p = &self.world.p;
-        let inside: Vec<usize> = (0..p.len()).filter(|&i| pack.region.holds(&p.x[i], 0.0)).collect();
-        let mean_vol: f64 = templates.iter().zip(&frac).map(|(t, f)| f * t.mean_volume()).sum();
-        let mean_mass: f64 = templates.iter().zip(&frac).map(|(t, f)| f * t.density * t.mean_volume()).sum();
-        let want = match pack.target {
-            Target::Count(n) => n as f64 - inside.len() as f64,
-            Target::VolumeFraction(f) => {
-                let have: f64 = inside.iter().map(|&i| 4.0 / 3.0 * PI * p.radius[i].powi(3)).sum();
-                (f * pack.region.volume() - have) / mean_vol
-            }
-            Target::Mass(m) => (m - inside.iter().map(|&i| p.mass[i]).sum::<f64>()) / mean_mass,
-        };
-        let n = want.round().max(0.0) as usize;
-        // Which template each particle comes from: exact shares (largest remainders), or each
-        // drawn on its own.
-        // Round 0 keeps the streams of a single insertion; later rounds draw new ones.
-        let seed = pack.seed.wrapping_add(pack.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
         let mut pick = SplitMix64(dist.seed ^ seed.rotate_left(32));
         let mut counts = vec![0usize; templates.len()];
-        if pack.exact {
+        if exact {
             let raw: Vec<f64> = frac.iter().map(|f| f * n as f64).collect();
             for (c, r) in counts.iter_mut().zip(&raw) {
                 *c = r.floor() as usize;
@@ -470,17 +493,66 @@ impl Deck {
         }
         // Largest first; ties keep template order (a stable sort).
         new.sort_by(|x, y| y.0.total_cmp(&x.0));
+        (templates, new)
+    }
+
+    /// The particles present, hashed for overlap tests against a batch about to be placed.
+    pub(super) fn occupied(&self, new: &[(f64, usize)]) -> Grid {
+        let p = &self.world.p;
         let rmax = new.iter().map(|x| x.0).chain(p.radius.iter().copied()).fold(0.0, f64::max);
         let mut grid = Grid::new(2.0 * rmax);
         for i in 0..p.len() {
             grid.add(p.x[i], p.radius[i]);
         }
+        grid
+    }
+
+    /// Adds one inserted particle (the next free id) and returns its index.
+    pub(super) fn add_inserted(&mut self, t: &Template, x: Vec3, r: f64, vel: Vec3, omega: Vec3) -> usize {
+        let id = self.world.p.id.iter().copied().max().unwrap_or(0) + 1;
+        self.world.p.push(id, t.typ, x, 2.0 * r, t.density);
+        let i = self.world.p.len() - 1;
+        self.world.p.v[i] = vel;
+        self.world.p.omega[i] = omega;
+        i
+    }
+
+    fn insert(&mut self, pack: &Pack) -> R<usize> {
+        let dom = self.world.domain.ok_or("insertion before the simulation box exists")?;
+        let (lo, hi) = pack.region.bounds();
+        if (0..3).any(|k| lo[k] < dom.lo[k] || hi[k] > dom.hi[k]) {
+            return Err("the region reaches outside the simulation box".into());
+        }
+        let (mean_vol, mean_mass) = self.distribution_means(&pack.dist);
+        // What is already in the region counts towards the target.
+        let p = &self.world.p;
+        let inside: Vec<usize> = (0..p.len()).filter(|&i| pack.region.holds(&p.x[i], 0.0)).collect();
+        let want = match pack.target {
+            Target::Count(n) => n as f64 - inside.len() as f64,
+            Target::VolumeFraction(f) => {
+                let have: f64 = inside.iter().map(|&i| 4.0 / 3.0 * PI * p.radius[i].powi(3)).sum();
+                (f * pack.region.volume() - have) / mean_vol
+            }
+            Target::Mass(m) => (m - inside.iter().map(|&i| p.mass[i]).sum::<f64>()) / mean_mass,
+        };
+        let n = want.round().max(0.0) as usize;
+        // Round 0 keeps the streams of a single insertion; later rounds draw new ones.
+        let seed = pack.seed.wrapping_add(pack.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let (templates, new) = self.draw_batch(&pack.dist, n, seed, pack.exact);
+        let mut grid = self.occupied(&new);
+        let p = &self.world.p;
         let mut rng = SplitMix64(seed);
         let mut id = p.id.iter().copied().max().unwrap_or(0);
-        for (placed, &(r, j)) in new.iter().enumerate() {
+        // As LIGGGHTS (FixInsertPack::x_v_omega): one budget of n × maxattempt random tries for the
+        // whole insertion; a particle is tried until it fits or the budget is spent.
+        let budget = n.saturating_mul(pack.maxattempt);
+        let mut tries = 0usize;
+        let mut placed = 0usize;
+        for &(r, j) in &new {
             let margin = if pack.all_in { r } else { 0.0 };
             let mut at = None;
-            for _ in 0..pack.maxattempt {
+            while tries < budget {
+                tries += 1;
                 let x = Vec3::new(
                     lo.x + margin + (hi.x - lo.x - 2.0 * margin).max(0.0) * rng.uniform(),
                     lo.y + margin + (hi.y - lo.y - 2.0 * margin).max(0.0) * rng.uniform(),
@@ -491,23 +563,7 @@ impl Deck {
                     break;
                 }
             }
-            let Some(x) = at else {
-                // A periodic refill tops up what earlier rounds left in the region; falling short
-                // there is LIGGGHTS' warning, not an error (the first round must fit whole).
-                if pack.round > 0 {
-                    self.warn(&format!(
-                        "{}: Less insertions than requested: {placed} of {n} at step {} ({} random tries found no free place for one of radius {r:e} m)",
-                        pack.label,
-                        self.world.step + 1,
-                        pack.maxattempt
-                    ));
-                    return Ok(placed);
-                }
-                return Err(format!(
-                    "the region has no room: placed {placed} of {n} particles, then {} random tries found no free place for one of radius {r:e} m (lower the target or enlarge the region)",
-                    pack.maxattempt
-                ));
-            };
+            let Some(x) = at else { break };
             grid.add(x, r);
             id += 1;
             let t = &templates[j];
@@ -515,14 +571,26 @@ impl Deck {
             let i = self.world.p.len() - 1;
             self.world.p.v[i] = pack.vel;
             self.world.p.omega[i] = pack.omega;
+            placed += 1;
         }
-        Ok(n)
+        if placed < n {
+            // LIGGGHTS warns ("Particle insertion: Less insertions than requested") and goes on.
+            let r = new[placed].0;
+            self.warn_here(&format!(
+                "{} at step {}: Particle insertion: Less insertions than requested: placed {placed} of {n} ({} random tries, maxattempt {} per particle, found no free place for one of radius {r:e} m)",
+                pack.label,
+                self.world.step + 1,
+                budget,
+                pack.maxattempt
+            ));
+        }
+        Ok(placed)
     }
 }
 
 /// Spheres hashed into cubic cells no smaller than the largest diameter: an overlap can only be
 /// with a sphere in one of the 27 cells around a point.
-struct Grid {
+pub(super) struct Grid {
     cell: f64,
     cells: HashMap<[i64; 3], Vec<(Vec3, f64)>>,
 }
@@ -536,12 +604,12 @@ impl Grid {
         [(x.x / self.cell).floor() as i64, (x.y / self.cell).floor() as i64, (x.z / self.cell).floor() as i64]
     }
 
-    fn add(&mut self, x: Vec3, r: f64) {
+    pub(super) fn add(&mut self, x: Vec3, r: f64) {
         let k = self.key(x);
         self.cells.entry(k).or_default().push((x, r));
     }
 
-    fn overlaps(&self, x: Vec3, r: f64) -> bool {
+    pub(super) fn overlaps(&self, x: Vec3, r: f64) -> bool {
         let k = self.key(x);
         for dx in -1..=1 {
             for dy in -1..=1 {

@@ -1,7 +1,9 @@
 //! `fix` and `unfix`: one handler per fix style (the `match` in `fix`).
 
 mod ave_time;
+pub(super) mod check_timestep;
 pub(super) mod insert;
+mod stream;
 mod walls;
 
 use super::*;
@@ -102,6 +104,8 @@ impl Deck {
             | "particledistribution/discrete/massbased"
             | "particledistribution/discrete/numberbased" => self.particle_distribution(a)?,
             "insert/pack" => self.insert_pack(a)?,
+            "insert/stream" => self.insert_stream(a)?,
+            "check/timestep/gran" => self.check_timestep(a)?,
             other => return Err(unsupported(&format!("fix style {other}"))),
         };
         self.fixes.push((id.into(), kind));
@@ -135,6 +139,7 @@ impl Deck {
             }
             FixKind::MeshSurface(_) => return Err(unsupported("unfix of a mesh/surface fix")),
             FixKind::Insert => self.stop_inserting(id),
+            FixKind::CheckTimestep(k) => self.checks[k] = None,
         }
         Ok(())
     }

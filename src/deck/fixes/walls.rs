@@ -144,7 +144,9 @@ impl Deck {
         // geometryTolerance and updateEvery but not give other values (they would be ignored);
         // pairRadii concerns pairs only.
         let Some(p) = &self.pair else { return Err("fix wall/gran before pair_style gran".into()) };
-        if (&p.model, &p.tangential, p.surface_mc) != (&m.model, &m.tangential, m.surface_mc) {
+        if (&p.model, &p.tangential, p.surface_mc, p.hooke_options())
+            != (&m.model, &m.tangential, m.surface_mc, m.hooke_options())
+        {
             return Err(unsupported("a wall model different from the pair model"));
         }
         let given = |key: &str| a.iter().rposition(|w| *w == key).and_then(|i| a.get(i + 1));

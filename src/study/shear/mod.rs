@@ -13,20 +13,23 @@
 //! `DIR/runs.csv`, the Eq. 8 fit `DIR/response_surface.csv` next to Tables D.1/D.2, plots and
 //! `DIR/report.md`.
 //!
-//! Files: `protocol` (one run), `grid` (the grid and its runs), `paper` (Tables D.1/D.2),
+//! Files: `protocol` (one run), `grid` (the grid and its options), `runs` (the grid's runs),
+//! `paper` (Tables D.1/D.2),
 //! `surface` (the Eq. 8 fit over the grid), `report` (CSV, plots, report).
 
 mod grid;
 mod paper;
 mod protocol;
 mod report;
+mod runs;
 mod surface;
 
-pub use grid::{run, CostRow, Grid, Options, Summary};
+pub use grid::{CostRow, Grid, Options};
 pub use paper::{paper_values, PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 pub use protocol::{
     classify, k_n, run_one, run_refined, time_step, time_unit, Protocol, RunResult, RunSpec, Stop, DENSITY,
     DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START, RESTITUTION, SKIN,
     YOUNGS_MODULUS,
 };
+pub use runs::{run, Summary};
 pub use surface::{phi_c_floor, response_surface, SurfaceRow};

@@ -348,9 +348,9 @@ pub(super) fn report(
         s,
         "No LIGGGHTS cross-check: LIGGGHTS 3.8's route to simple shear (triclinic box + `fix deform … remap v`) \
          creates no periodic ghost atoms in a triclinic box, so contacts across periodic boundaries are lost \
-         without an error (`liggghts_inputs/triclinic_ghost_probe.in`, tested in tests/liggghts.rs). The shear \
+         without an error (`liggghts_inputs/triclinic_ghost_probe.in`, tested in tests/plugin/decks.rs). The shear \
          runs on the standalone engine only; its Lees–Edwards contacts are tested against plain pairs at the \
-         image positions (tests/dem_shear.rs).\n"
+         image positions (tests/dem/shear.rs).\n"
     );
     let total_wall: f64 = results.iter().map(|r| r.wall_s).sum();
     let _ = writeln!(

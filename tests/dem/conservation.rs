@@ -53,7 +53,18 @@ fn momentum(w: &World) -> Vec3 {
 
 #[test]
 fn energy_is_conserved_without_damping_and_friction() {
+    energy_conserved(gas(1.0, 0.0, 1e-7));
+}
+
+/// The same gas under `model hooke` (e = 1: no damping; the stored energy is ½ k_n δ²).
+#[test]
+fn energy_is_conserved_under_hooke_without_damping_and_friction() {
     let mut w = gas(1.0, 0.0, 1e-7);
+    w.use_hooke(1.0, &[1.0], (true, false, false)).unwrap();
+    energy_conserved(w);
+}
+
+fn energy_conserved(mut w: World) {
     w.setup().unwrap();
     let e0 = energy(&w);
     let mut worst = 0.0_f64;

@@ -8,7 +8,7 @@
 //!   δ_{k→c} = −γ (1+ν) F_k / (2π E d) · B(s),  B(s) = 2(1−ν) + 2(1−2ν) s − (7−8ν) s²,
 //!
 //! with s = sin(α/2), d the chord between the two contact points and F_k the previous pass's
-//! normal force (spec §2). At α = 70° and ν = 0.3, B > 0, so the term is negative (the surface
+//! normal force (docs/spec.md §2). At α = 70° and ν = 0.3, B > 0, so the term is negative (the surface
 //! at c recedes): about −4.2e-4 r. `abs` compares |δ_{k→c}| with δ_max = MPR r, `signed` compares
 //! δ_{k→c} itself, so with MPR between the two the settings must switch differently: `abs` trips
 //! and the contact is plain Hertz, `signed` keeps the multi-contact correction.
@@ -37,7 +37,7 @@ fn hertz(ri: f64, rj: f64, delta: f64) -> f64 {
 /// pass before. Measured: the forces of step 1 are still the set-up pass's (no previous force
 /// reaches the multi-contact pass of step 1, in both engines), so step 2 is the first with a
 /// correction, and it reads step 1's forces, which are Hertz. Both contact points lie
-/// r − δ/2 from the centre (the midpoint of the overlap, spec §2), so on that sphere the inward
+/// r − δ/2 from the centre (the midpoint of the overlap, docs/spec.md §2), so on that sphere the inward
 /// normals give n_k·u = s, n_c·u = −s and the chord is d = 2 (r − δ/2) s.
 fn eq2_term() -> f64 {
     let s = (ALPHA_DEG.to_radians() / 2.0).sin();

@@ -7,8 +7,7 @@ use std::process::Output;
 
 use assert_cmd::Command;
 
-mod common;
-use common::present;
+use crate::common::present;
 
 /// `mcdem bench ARGS… FILE`.
 fn bench(args: &[&str], file: &Path) -> Output {
@@ -95,7 +94,7 @@ fn quick_bench_writes_rows_and_ratios() {
 }
 
 /// `--write-packing K FILE` writes the deck's data file (4 K³ spheres, read back by `mcdem run` in
-/// tests/dem_liggghts.rs) and names a bad K.
+/// tests/dem/against_liggghts.rs) and names a bad K.
 #[test]
 fn write_packing_writes_a_data_file_and_refuses_a_bad_size() {
     let dir = tempfile::tempdir().unwrap();

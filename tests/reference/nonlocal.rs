@@ -112,7 +112,7 @@ fn die_table() -> Vec<(f64, f64, f64, f64)> {
         .collect()
 }
 
-const DIE_TABLE_CSV: &str = include_str!("../validation/reference/die_single_boussinesq.csv");
+const DIE_TABLE_CSV: &str = include_str!("../../validation/reference/die_single_boussinesq.csv");
 
 /// The table's derivation is committed: the script (closed forms written out, nothing from mcdem)
 /// prints the committed CSV byte for byte. Checked to fail: with 7 − 8.1ν for 7 − 8ν in the script's

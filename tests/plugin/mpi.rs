@@ -4,8 +4,7 @@
 //! per-contact store like LIGGGHTS's own per-contact data. Outputs are read with polars.
 #![cfg(feature = "liggghts")]
 
-mod common;
-use common::frames;
+use crate::common::frames;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

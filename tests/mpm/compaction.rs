@@ -104,3 +104,46 @@ fn quick_compaction_passes_the_sliver_node_stall() {
     eprintln!("sliver contact sides {sliver}; closest points of two bodies {:.3} h", closest / h);
     assert!(closest > 0.2 * h, "points of two bodies {:.3} h apart", closest / h);
 }
+
+/// Two discs (R = 1.8 mm, h = 0.5 mm) squeezed in an 8 × 3.9 mm box by the top wall at 2 m/s: the
+/// solid fraction Φ rises monotonically towards 1 and `mcdem mpm` stops the run the step Φ passes 1
+/// (solid filling more than the box is impossible: material past the walls at the resolution's
+/// limit), with a failure exit, a message naming Φ and the step, and the history kept up to the
+/// previous output, all of it at Φ < 1.
+#[test]
+fn a_packing_stops_where_the_solid_fraction_passes_one() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = r#"{"dimension": 2, "material": {"law": "neohookean", "lambda": 3e6, "mu": 1.5e6, "density": 990},
+        "bodies": [{"shape": "disc", "center": [0.002, 0.002], "radius": 0.0018},
+                   {"shape": "disc", "center": [0.006, 0.002], "radius": 0.0018}],
+        "grid": {"h": 5e-4, "points_per_cell": 2, "margin": 2},
+        "walls": [{"axis": 0, "side": 1, "position": 0.0}, {"axis": 0, "side": -1, "position": 0.008},
+                  {"axis": 1, "side": 1, "position": 0.0}, {"axis": 1, "side": -1, "position": 0.0039, "velocity": -2.0}],
+        "dt": 5e-6, "steps": 300, "output_every": 10}"#;
+    std::fs::write(d.path().join("two.json"), scene).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mcdem"))
+        .current_dir(d.path())
+        .args(["mpm", "two.json", "--out", "out"])
+        .output()
+        .expect("mcdem starts");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    let line = err.lines().find(|l| l.contains("the solid fraction")).unwrap_or_else(|| panic!("{err}"));
+    let phi: f64 = line.split("Φ = ").nth(1).and_then(|t| t.split(' ').next()).unwrap().parse().unwrap();
+    let step: usize =
+        line.split("step ").nth(1).and_then(|t| t.split(':').next()).unwrap().trim().parse().unwrap();
+    assert!(phi > 1.0 && phi < 1.01, "{line}");
+    assert!(step > 100 && step < 300, "{line}");
+    let csv = std::fs::read_to_string(d.path().join("out/packing.csv")).unwrap();
+    let rows: Vec<(usize, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[0].parse().unwrap(), c[2].parse().unwrap())
+        })
+        .collect();
+    let last = rows.last().unwrap();
+    assert!(last.0 < step && step - last.0 <= 10, "last row {last:?}, stop at {step}");
+    assert!(rows.windows(2).all(|w| w[1].1 > w[0].1) && last.1 < 1.0 && last.1 > 0.95, "{rows:?}");
+}

@@ -4,8 +4,6 @@
 use std::path::Path;
 use std::process::Command;
 
-mod common;
-
 fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
     let dir = tempfile::tempdir().unwrap();
     let deck = dir.path().join("in.test");
@@ -51,7 +49,7 @@ fn unknown_command_names_file_and_line() {
 
 #[test]
 fn vtk_dumps_are_written_and_unsupported_forms_stop() {
-    // The files themselves are checked in tests/cli_compare_vtk.rs.
+    // The files themselves are checked in tests/cli/compare_vtk.rs.
     let (ok, out) = run_deck(&format!("{BASE}dump d all custom/vtk 10 post/x*.vtk id x\nrun 10\n"), &[]);
     assert!(ok && !out.contains("WARNING"), "{out}");
     let (ok, out) = run_deck(&format!("{BASE}dump d all custom/vtk 10 post/x*.vtu id x\nrun 10\n"), &[]);
@@ -379,7 +377,7 @@ fn custom_dump_frames_follow_the_interval_and_the_atom_count() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(frames(ours.path()), want);
-    if common::present(Command::new("liggghts").arg("-h").output().is_ok(), "the liggghts binary") {
+    if crate::common::present(Command::new("liggghts").arg("-h").output().is_ok(), "the liggghts binary") {
         let theirs = tempfile::tempdir().unwrap();
         std::fs::write(theirs.path().join("in.test"), &deck).unwrap();
         let o = Command::new("liggghts")
@@ -426,11 +424,25 @@ fn contact_model_keywords_name_the_bad_value() {
     for (to, says) in [
         (
             "pair_style gran tangential history",
-            "in.test:11: pair_style gran: 'model hertz' or 'model mc_advanced' is required",
+            "in.test:11: pair_style gran: 'model hertz', 'model hooke' or 'model mc_advanced' is required",
         ),
         (
             "pair_style gran model hooke/hysteresis tangential history",
-            "in.test:11: unsupported granular model 'hooke/hysteresis' (hertz or mc_advanced)",
+            "in.test:11: unsupported granular model 'hooke/hysteresis' (hertz, hooke or mc_advanced)",
+        ),
+        (
+            // As in LIGGGHTS, the missing property is found when the run starts.
+            "pair_style gran model hooke tangential history",
+            "in.test:17: fix property/global characteristicVelocity is missing (model hooke needs",
+        ),
+        (
+            "pair_style gran model hooke tangential history surface multicontact",
+            "in.test:11: model hooke has no multi-contact form",
+        ),
+        ("pair_style gran model hooke tangential history viscous on", "in.test:11: unsupported viscous on"),
+        (
+            "pair_style gran model hertz tangential history limitForce on",
+            "in.test:11: unsupported limitForce on with model hertz (model hooke only)",
         ),
         (
             "pair_style gran model hertz tangential spring",
@@ -444,4 +456,45 @@ fn contact_model_keywords_name_the_bad_value() {
         let (ok, out) = run_deck(&format!("{}run 1\n", BASE.replace(pair, to)), &[]);
         assert!(!ok && out.contains(says), "{to}: {out}");
     }
+}
+
+/// `fix check/timestep/gran`: one sphere (r = 1 mm, ρ = 1000 kg/m³, E = 5 MPa, ν = 0.3) moving
+/// force-free at 1 m/s, Δt = 1 µs, skin 0.2 mm. By hand: t_R = π r √(ρ/G) / (0.1631 ν + 0.8766)
+/// = 7.7404e-5 s (Δt/t_R = 0.0129193); t_H = 2.87 (m² / (r/2 · E_eff² · 2v))^(1/5) with
+/// E_eff = E / (2(1 − ν²)) = 2.1437e-4 s (Δt/t_H = 0.0046649); v_max Δt / skin = 2 m/s · 1 µs /
+/// 0.2 mm = 0.01. The vector is 0 before the first check (step 0), the warnings come when Δt passes
+/// the fractions and not with `warn no`, and a bad keyword names the line.
+#[test]
+fn check_timestep_gran_reports_rayleigh_and_hertz_fractions() {
+    let deck = |args: &str| {
+        format!(
+            "{BASE}set atom 1 vx 1\nfix ts all check/timestep/gran 100 {args}\nthermo_style custom step f_ts[1] f_ts[2] f_ts[3]\nthermo_modify format float %.10g\nthermo 100\nrun 200\n"
+        )
+    };
+    let (ok, out) = run_deck(&deck("0.1 0.1"), &[]);
+    assert!(ok, "{out}");
+    let rows: Vec<Vec<f64>> = out
+        .lines()
+        .filter_map(|l| l.split_whitespace().map(|w| w.parse::<f64>().ok()).collect::<Option<Vec<f64>>>())
+        .filter(|r| r.len() == 4)
+        .collect();
+    assert_eq!(rows.len(), 3, "{out}");
+    assert_eq!(rows[0], [0.0, 0.0, 0.0, 0.0], "nothing before the first check: {out}");
+    for r in &rows[1..] {
+        assert!((r[1] / 0.012919299 - 1.0).abs() < 1e-7, "Rayleigh fraction {r:?}");
+        assert!((r[2] / 0.0046648975 - 1.0).abs() < 1e-7, "Hertz fraction {r:?}");
+        assert!((r[3] / 0.01 - 1.0).abs() < 1e-8, "skin fraction {r:?}");
+    }
+    assert!(!out.contains("WARNING: time-step"), "below the fractions: {out}");
+    let (ok, out) = run_deck(&deck("0.01 0.001"), &[]);
+    assert!(ok, "{out}");
+    assert_eq!(out.matches("WARNING: time-step is 1.291930 % of rayleigh time").count(), 2, "{out}");
+    assert_eq!(out.matches("WARNING: time-step is 0.466490 % of hertz time").count(), 2, "{out}");
+    let (ok, out) = run_deck(&deck("0.01 0.001 warn no"), &[]);
+    assert!(ok && !out.contains("WARNING: time-step"), "{out}");
+    let (ok, out) = run_deck(&deck("0.01 0.001 warm no"), &[]);
+    assert!(
+        !ok && out.contains("in.test:18: fix ts check/timestep/gran: expected 'warn yes' or 'warn no'"),
+        "{out}"
+    );
 }

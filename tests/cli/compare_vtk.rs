@@ -9,8 +9,6 @@ use std::process::{Command, Output};
 
 use polars::prelude::*;
 
-mod common;
-
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -52,7 +50,7 @@ fn run_mcdem(dir: &Path, deck: &Path, vars: &[String]) {
 }
 
 fn liggghts_wanted() -> bool {
-    common::present(Command::new("liggghts").arg("-h").output().is_ok(), "the liggghts binary")
+    crate::common::present(Command::new("liggghts").arg("-h").output().is_ok(), "the liggghts binary")
 }
 
 #[test]

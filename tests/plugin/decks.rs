@@ -19,8 +19,7 @@ use std::process::Output;
 use assert_cmd::Command;
 use tempfile::TempDir;
 
-mod common;
-use common::frames;
+use crate::common::frames;
 
 fn decks() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("liggghts_inputs")
@@ -428,7 +427,7 @@ fn hydrogel_approximations_bound_the_piston_force_error_in_the_plugin() {
     //   the same as the Rust engine's;
     // - `updateEvery K` recomputes the radius changes every K steps and at neighbour builds: the
     //   radius changes lag by up to K steps, so the error grows with K (bounds as in the Rust
-    //   engine's test, tests/dem_mc_approximations.rs: this piston is ten times faster).
+    //   engine's test, tests/dem/mc_approximations.rs: this piston is ten times faster).
     // Each error must shrink with its setting, and `updateEvery 1` is the exact run.
     let tmp = TempDir::new().unwrap();
     let run_with = |tol: &str, every: &str| {

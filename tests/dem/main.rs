@@ -1,0 +1,21 @@
+//! The standalone DEM (`mcdem run`): conservation, decks, insertion, walls, the multi-contact laws through the engine, threads, sorting, shear, and step-by-step agreement with LIGGGHTS.
+//!
+//! One test binary per area (each module below was a binary of its own).
+
+#[allow(dead_code)] // not every helper is used by every area
+#[path = "../common/mod.rs"]
+mod common;
+
+mod against_liggghts;
+mod conservation;
+mod deck;
+mod insert;
+mod mc_advanced;
+mod mc_approximations;
+mod mesh_walls;
+mod mpr_test;
+mod portable;
+mod restart;
+mod shear;
+mod sorting;
+mod threads;
