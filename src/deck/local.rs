@@ -11,8 +11,11 @@ use super::format;
 use super::output::create;
 use crate::engine::{PairContact, World};
 
-/// A keyword of `compute pair/gran/local` and the columns it adds (LIGGGHTS order).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A keyword of `compute pair/gran/local` and the columns it adds. The declaration order is the
+/// order LIGGGHTS 3.8 writes the columns in, whatever the order of the keywords in the deck
+/// (`compute_pair_gran_local.cpp` sets one flag per keyword and writes the flagged groups in a
+/// fixed order), so the keywords are sorted by it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Quantity {
     /// x_i, x_j (6).
     Pos,
@@ -28,13 +31,13 @@ enum Quantity {
     ForceTangential,
     /// Contact torque on i (3).
     Torque,
+    /// The pair's contact history as LIGGGHTS lists it: under `model hertz tangential history`
+    /// the tangential spring (3), under `no_history` nothing (0).
+    History,
     /// Area of the intersection circle of the two original spheres (1).
     ContactArea,
     /// Geometric overlap r_i + r_j − |x_i − x_j| with the original radii (1).
     Delta,
-    /// The pair's contact history as LIGGGHTS lists it: under `model hertz tangential history`
-    /// the tangential spring (3), under `no_history` nothing (0).
-    History,
 }
 
 impl Quantity {
@@ -64,20 +67,36 @@ pub struct PairLocal {
 }
 
 impl PairLocal {
-    /// From the keywords after the style. LIGGGHTS's default set includes the contact history,
-    /// whose layout depends on the model: here the keywords must be listed.
+    /// From the keywords after the style; none gives LIGGGHTS's default set (`pos vel id force
+    /// torque history contactArea`). Keywords LIGGGHTS 3.8 does not have, or that need a physics
+    /// mcdem does not model, are named with the reason.
     pub fn parse(keywords: &[&str]) -> Result<Self, String> {
-        if keywords.is_empty() {
-            return Err("compute pair/gran/local: list the keywords (pos vel id force force_normal \
-                        force_tangential torque contactArea delta); the default set includes 'history'"
-                .into());
-        }
-        let quantities = keywords
-            .iter()
-            .map(|k| {
-                Quantity::parse(k).ok_or_else(|| format!("unsupported compute pair/gran/local keyword {k}"))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        use Quantity::*;
+        let mut quantities = if keywords.is_empty() {
+            vec![Pos, Vel, Id, Force, Torque, History, ContactArea]
+        } else {
+            keywords
+                .iter()
+                .map(|k| {
+                    Quantity::parse(k).ok_or_else(|| match *k {
+                        "heatFlux" => "compute pair/gran/local keyword heatFlux: out of scope: heat transfer \
+                                       (it reads fix heat/gran/conduction)"
+                            .to_string(),
+                        "contactPoint" | "ms_id" => format!(
+                            "compute pair/gran/local keyword {k} is not one of LIGGGHTS 3.8 (which stops at it \
+                             with 'Invalid keyword'; later LIGGGHTS versions added it)"
+                        ),
+                        _ => format!(
+                            "unsupported compute pair/gran/local keyword {k} (pos vel id force force_normal \
+                             force_tangential torque history contactArea delta)"
+                        ),
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?
+        };
+        // LIGGGHTS writes each flagged group once, in its own order.
+        quantities.sort_unstable();
+        quantities.dedup();
         Ok(PairLocal { quantities, history: 3 })
     }
 
@@ -235,7 +254,7 @@ impl PairLocal {
         match columns {
             Some(n) => self.history = n,
             None if self.quantities.contains(&Quantity::History) => {
-                return Err("unsupported compute pair/gran/local keyword history with a multi-contact model (its contact record is the plugin's own layout; list the other keywords)".into())
+                return Err("unsupported compute pair/gran/local keyword history with a multi-contact model (its contact record is the plugin's own layout; list the other keywords: the default set, with no keyword, includes history)".into())
             }
             None => {}
         }

@@ -85,8 +85,16 @@ impl State {
                 .fraction
                 .filter(|(f, _, f1)| f > f1)
                 .map(|(f, t1, f1)| t + (1.0 - f).max(0.0) * now.duration_since(t1).as_secs_f64() / (f - f1));
-            let e = r.expected.or(from_pace).or(mean)?;
-            over |= t > e;
+            let e = match r.expected.or(from_pace) {
+                Some(e) => {
+                    over |= t > e;
+                    e
+                }
+                // Without its own estimate an item borrows the mean of the items done; once it has
+                // run longer than that mean, the mean says nothing about it (a long case after
+                // short ones): the time left is not known.
+                None => mean.filter(|&m| t <= m)?,
+            };
             work += (e - t).max(0.0);
         }
         let waiting = self.total.saturating_sub(self.done + self.running.len());
@@ -360,14 +368,19 @@ mod tests {
         // The waiting item's previous time replaces the mean.
         s.expected.push(("d".into(), 100.0));
         assert_eq!(s.left(t0), Some((110.0, false)));
-        // A running item past its estimate: the rest is a lower bound.
+        // A running item past the mean of the others, with no estimate of its own: not known.
         let late = t0 + Duration::from_secs(30);
+        assert_eq!(s.left(late), None);
+        assert!(s.message(33.0, late).ends_with("time left not known yet"));
+        // A running item past its own expected time: the rest is a lower bound.
+        s.running[0].expected = Some(20.0);
         assert_eq!(s.left(late), Some((100.0, true)));
         assert!(s.message(33.0, late).ends_with("at least 100 s left (longer than estimated)"));
         s.running[0].details.push(("nu=0.5".into(), "nu=0.5: hertz".into()));
         assert_eq!(s.running_names(), "c (nu=0.5: hertz)");
-        assert!(s.message(3.0, t0).starts_with("running c (nu=0.5: hertz), 3 s elapsed, about 110 s left"));
+        assert!(s.message(3.0, t0).starts_with("running c (nu=0.5: hertz), 3 s elapsed, about 120 s left"));
         // The item's own pace: from 0.25 at 10 s to 0.5 at 30 s, so 40 s to go.
+        s.running[0].expected = None;
         s.running[0].fraction = Some((0.5, t0 + Duration::from_secs(10), 0.25));
         assert_eq!(s.left(late), Some((140.0, false)));
     }

@@ -7,8 +7,10 @@
 //! NRMSE = RMSE(model − nonlocal) / mean(nonlocal) over the reference's load steps with φ ≥ 0.66
 //! (below, the loose packing carries almost no load and the relative error is meaningless).
 
+use std::cell::Cell;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -265,6 +267,18 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         s.nonlocal_steps,
         if opts.quick { " Quick mode: 4× piston speed, two ν — a smoke test, not the paper's numbers." } else { "" }
     );
+    // The part of the case done, for the time-left estimate: stages (start state, reference, one
+    // model run each) finished over stages planned. The γ ladder may stop early and the calibrated
+    // runs may be absent; a ν that ends counts all its planned stages as done.
+    let planned_per_nu = 3 + GAMMA_LADDER.len() + 1 + if opts.quick { 0 } else { 3 };
+    let planned = (planned_per_nu * s.nus.len()) as f64;
+    let stages_done = AtomicUsize::new(0);
+    let tell = |finished: usize| {
+        let done = stages_done.fetch_add(finished, Ordering::Relaxed) + finished;
+        if let Some(p) = &opts.progress {
+            p.fraction("uniaxial", done as f64 / planned);
+        }
+    };
     // One ν per core: each ν is an independent chain (start state, reference, models).
     let per_nu = |nu: f64| -> Result<NuResult, String> {
         let mut r = NuResult::default();
@@ -272,7 +286,12 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             (&mut r.rows, &mut r.models, &mut r.targets, &mut r.unstable, &mut r.md);
         // What this ν is on, for the progress display (one line per model run, not per step).
         let key = format!("nu={nu}");
+        let started = Cell::new(0usize);
         let note = |what: &str| {
+            if started.get() > 0 {
+                tell(1);
+            }
+            started.set(started.get() + 1);
             if let Some(p) = &opts.progress {
                 p.detail("uniaxial", &key, format!("{key}: {what}"));
             }
@@ -424,6 +443,8 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             },
         )?;
         let _ = writeln!(md, "\n![ν = {nu}]({file})\n");
+        // The last stage and any planned stage that did not run.
+        tell(planned_per_nu.saturating_sub(started.get().saturating_sub(1)));
         Ok(r)
     };
     let results: Vec<Result<NuResult, String>> = s

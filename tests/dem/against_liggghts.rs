@@ -142,41 +142,46 @@ fn hooke_collisions_and_wall_match_liggghts_step_by_step() {
 
 /// `compute pair/gran/local … history`: under `hertz tangential history` LIGGGHTS lists the
 /// pair's tangential spring (3 columns); the same deck with that compute, to the 6 printed digits.
+/// Twice: with the keywords listed out of LIGGGHTS's column order (`delta history id`: LIGGGHTS
+/// writes id, history, delta, 7 columns, whatever the order in the deck) and with no keyword
+/// (LIGGGHTS's default set, pos vel id force torque history contactArea: 25 columns).
 #[test]
-fn pair_gran_local_history_matches_liggghts() {
+fn pair_gran_local_history_and_default_set_match_liggghts() {
     if !have_liggghts() {
         return;
     }
     let text = std::fs::read_to_string(repo().join("liggghts_inputs/two_particle_collision.in")).unwrap();
     let keys = "pos vel id force force_normal force_tangential torque contactArea delta";
     assert!(text.contains(keys));
-    let cols: String = (1..=7).map(|k| format!(" c_fc[{k}]")).collect();
-    let text: String = text
-        .replace(keys, "id history delta")
-        .lines()
-        .map(|l| {
-            if l.starts_with("dump\t\tdl ") {
-                format!("dump\t\tdl all local 10 post/two_particle_contacts.dump{cols}")
-            } else {
-                l.to_string()
-            }
-        })
-        .collect::<Vec<_>>()
-        .join("\n");
-    let dir = tempfile::tempdir().unwrap();
-    let deck = dir.path().join("history.in");
-    std::fs::write(&deck, text).unwrap();
-    let (o, t) = run_both(&deck, &[], &[]);
-    let f = "post/two_particle_contacts.dump";
-    let read = |d: &tempfile::TempDir| mcdem::outputs::read_dump(&d.path().join(f)).unwrap();
-    let (a, b) = (read(&o), read(&t));
-    assert_eq!(a.len(), b.len());
-    assert!(b.iter().filter(|fr| !fr.rows.is_empty()).count() >= 10, "too few frames with a contact");
-    assert_eq!(b[0].columns.len(), 7);
-    // The spring is not zero (the collision is oblique and spinning), so the columns carry it.
-    assert!(b.iter().flat_map(|fr| &fr.rows).any(|r| r[3].abs() > 1e-7));
-    let d = frames::frame_difference(&a, &b, &(0..7).collect::<Vec<_>>());
-    assert!(d <= 1e-5, "dump local with history: max relative difference {d:e}");
+    for (listed, width, spring) in [(" delta history id", 7, 3), ("", 25, 21)] {
+        let cols: String = (1..=width).map(|k| format!(" c_fc[{k}]")).collect();
+        let text: String = text
+            .replace(&format!(" {keys}"), listed)
+            .lines()
+            .map(|l| {
+                if l.starts_with("dump\t\tdl ") {
+                    format!("dump\t\tdl all local 10 post/two_particle_contacts.dump{cols}")
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let dir = tempfile::tempdir().unwrap();
+        let deck = dir.path().join("history.in");
+        std::fs::write(&deck, text).unwrap();
+        let (o, t) = run_both(&deck, &[], &[]);
+        let f = "post/two_particle_contacts.dump";
+        let read = |d: &tempfile::TempDir| mcdem::outputs::read_dump(&d.path().join(f)).unwrap();
+        let (a, b) = (read(&o), read(&t));
+        assert_eq!(a.len(), b.len());
+        assert!(b.iter().filter(|fr| !fr.rows.is_empty()).count() >= 10, "too few frames with a contact");
+        assert_eq!(b[0].columns.len(), width, "keywords '{listed}'");
+        // The spring is not zero (the collision is oblique and spinning), so the columns carry it.
+        assert!(b.iter().flat_map(|fr| &fr.rows).any(|r| r[spring].abs() > 1e-7), "keywords '{listed}'");
+        let d = frames::frame_difference(&a, &b, &(0..width).collect::<Vec<_>>());
+        assert!(d <= 1e-5, "dump local, keywords '{listed}': max relative difference {d:e}");
+    }
 }
 
 /// Primitive `zcylinder` walls: three spheres pressed, rolling and sliding on the inside of an

@@ -82,10 +82,20 @@ fn nested_loops_with_label_next_and_jump() {
 
 #[test]
 fn pair_local_output_errors_name_the_problem() {
-    let (ok, out) = run_deck(&format!("{BASE}compute fc all pair/gran/local\nrun 1\n"), &[]);
-    assert!(!ok && out.contains("list the keywords"), "{out}");
+    // No keyword: LIGGGHTS's default set, pos vel id force torque history contactArea = 25 columns.
+    let default = |k: usize| {
+        format!("{BASE}compute fc all pair/gran/local\ndump dl all local 1 c.dump c_fc[{k}]\nrun 1\n")
+    };
+    let (ok, out) = run_deck(&default(25), &[]);
+    assert!(ok, "{out}");
+    let (ok, out) = run_deck(&default(26), &[]);
+    assert!(!ok && out.contains("c_fc[26] beyond its 25 columns"), "{out}");
     let (ok, out) = run_deck(&format!("{BASE}compute fc all pair/gran/local pos heatFlux\nrun 1\n"), &[]);
-    assert!(!ok && out.contains("unsupported compute pair/gran/local keyword heatFlux"), "{out}");
+    assert!(!ok && out.contains("heatFlux: out of scope: heat transfer"), "{out}");
+    let (ok, out) = run_deck(&format!("{BASE}compute fc all pair/gran/local contactPoint\nrun 1\n"), &[]);
+    assert!(!ok && out.contains("contactPoint is not one of LIGGGHTS 3.8"), "{out}");
+    let (ok, out) = run_deck(&format!("{BASE}compute fc all pair/gran/local forces\nrun 1\n"), &[]);
+    assert!(!ok && out.contains("unsupported compute pair/gran/local keyword forces"), "{out}");
     let (ok, out) = run_deck(&format!("{BASE}dump dl all local 1 c.dump c_nope[1]\nrun 1\n"), &[]);
     assert!(!ok && out.contains("no compute pair/gran/local nope"), "{out}");
     let text =

@@ -152,6 +152,12 @@ fn bad_values_name_the_command_and_line() {
     let bad = deck(BLOCK, "particles_in_region 10", 1).replace("radius constant 0.0005", "radius constant 0");
     let (ok, out, _) = run_deck(&bad, &[]);
     assert!(!ok && out.contains("in.test:15: fix pts1 particletemplate/sphere: radius must be > 0"), "{out}");
+    // An insertion seed equal to its distribution's or a template's seed (LIGGGHTS stops at it).
+    for (seed, who) in [(32452843, "distribution pdd"), (15485867, "template pts2 of distribution pdd")] {
+        let (ok, out, _) = run_deck(&deck(BLOCK, "particles_in_region 10", seed), &[]);
+        let needle = format!("in.test:18: fix ins insert/pack: seed {seed} is also the seed of {who}");
+        assert!(!ok && out.contains(&needle), "{out}");
+    }
 }
 
 /// A region that cannot hold its target: as LIGGGHTS (FixInsert::pre_exchange), a warning naming

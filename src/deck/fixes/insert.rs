@@ -30,6 +30,29 @@ impl Insertion {
     pub(super) fn has_distribution(&self, id: &str) -> bool {
         self.distributions.contains_key(id)
     }
+
+    /// LIGGGHTS 3.8 stops an insertion fix whose seed is also the seed of its distribution or of
+    /// one of that distribution's templates (`fix_insert.cpp`: the streams would be correlated);
+    /// a deck that mcdem ran and LIGGGHTS refuses would break the cross-check, so the same rule
+    /// holds here.
+    pub(super) fn check_distinct_seed(&self, what: &str, seed: u64, dist: &str) -> R<()> {
+        let Some(d) = self.distributions.get(dist) else { return Ok(()) };
+        let clash = if d.seed == seed {
+            Some(format!("distribution {dist}"))
+        } else {
+            d.parts
+                .iter()
+                .find(|(id, _)| self.templates.get(id.as_str()).is_some_and(|t| t.seed == seed))
+                .map(|(id, _)| format!("template {id} of distribution {dist}"))
+        };
+        match clash {
+            Some(who) => Err(format!(
+                "{what}: seed {seed} is also the seed of {who}; the insertion, its distribution and \
+                 the distribution's templates need different seeds (LIGGGHTS stops here too)"
+            )),
+            None => Ok(()),
+        }
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -363,6 +386,7 @@ impl Deck {
             vel,
             omega,
         };
+        self.insertion.check_distinct_seed(&what, pack.seed, &pack.dist)?;
         match pack.every {
             None => self.insertion.pending.push(pack),
             // As LIGGGHTS: first on the step after the definition, then every N steps.

@@ -211,6 +211,7 @@ impl Deck {
             vn: Vec3::zeros(),
             flying: Vec::new(),
         };
+        self.insertion.check_distinct_seed(&what, stream.seed, &stream.dist)?;
         self.geometry(&stream).map_err(|e| format!("{what}: {e}"))?;
         self.insertion.streams.push(stream);
         Ok(FixKind::Insert)
