@@ -532,7 +532,10 @@ fn soft_packing_example_runs_in_both_engines() {
     let text = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{text}");
     assert!(text.contains("inserted 452 particles"), "{text}");
-    let (a, b) = (read_ave_time(&dir.path().join("post/mcdem.txt")), read_ave_time(&dir.path().join("post/liggghts.txt")));
+    let (a, b) = (
+        read_ave_time(&dir.path().join("post/mcdem.txt")),
+        read_ave_time(&dir.path().join("post/liggghts.txt")),
+    );
     assert_eq!(a.len(), 4);
     assert_eq!(a.len(), b.len());
     for (x, y) in a.iter().zip(&b) {
