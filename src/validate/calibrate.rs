@@ -79,7 +79,7 @@ fn calibrate_one(
     note("start state", None);
     let (dump, data) = uniaxial::start_state(nu, s, dir)?;
     note("nonlocal reference", None);
-    let (refc, ref_secs) = uniaxial::reference(&dump, nu, kind, s.nonlocal_steps)?;
+    let (refc, ref_secs) = uniaxial::reference(&dump, nu, kind, s.nonlocal_steps, &mut |_| {})?;
     say(&format!("ν = {nu}: nonlocal reference ({}) in {ref_secs:.1} s", kind.name()));
     note("hertz", None);
     let (hc, _) = uniaxial::compress(Law::HERTZ, nu, s, &data)?;

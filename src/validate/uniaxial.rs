@@ -186,15 +186,53 @@ pub fn compress(m: Law, nu: f64, s: &Setup, data: &Path) -> Result<(Curve, DeckR
     Ok((compression(&run, s), run))
 }
 
+/// The part of the uniaxial case done, for the time-left estimate of the progress display: each
+/// ν is a chain of stages (start state, nonlocal reference, one DEM run per model), weighted by
+/// their expected cost in units of one DEM model run. The reference weighs `REFERENCE`: in the
+/// recorded full run (`validation/recorded/full_rerun/summary.json`) it took 79–85 s against
+/// 5–26 s, mean about 15 s, for one model run; it also tells its own progress by load step.
+struct Stages {
+    /// Thousandths of a unit done, over all ν.
+    done_milli: AtomicUsize,
+    /// Units planned, over all ν.
+    planned: usize,
+}
+
+impl Stages {
+    const REFERENCE: usize = 5;
+
+    /// Start state, reference, Hertz, the γ ladder, advanced MC with the App. B values, and in the
+    /// full mode the calibrated law and its two approximations.
+    fn planned_per_nu(quick: bool) -> usize {
+        1 + Self::REFERENCE + 1 + GAMMA_LADDER.len() + 1 + if quick { 0 } else { 3 }
+    }
+
+    /// Adds `milli` thousandths of a unit; returns the fraction done.
+    fn add(&self, milli: usize) -> f64 {
+        let done = self.done_milli.fetch_add(milli, Ordering::Relaxed) + milli;
+        (done as f64 / (1000 * self.planned) as f64).min(1.0)
+    }
+}
+
 /// The nonlocal reference from the state file: walls of the box, piston from its start height
-/// down to `Z_END`, gravity off.
-pub fn reference(state: &Path, nu: f64, kind: KernelKind, steps: usize) -> Result<(Curve, f64), String> {
-    use crate::nonlocal::uniaxial::{compress, Uniaxial};
+/// down to `Z_END`, gravity off. `progress` hears the part of the load steps done.
+pub fn reference(
+    state: &Path,
+    nu: f64,
+    kind: KernelKind,
+    steps: usize,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(Curve, f64), String> {
+    use crate::nonlocal::uniaxial::{compress_with, Uniaxial};
     let u = Uniaxial::hydrogel(nu, steps)?;
     let spheres = crate::nonlocal::scene::read_liggghts_dump(state, u.particle)?;
     let t = Instant::now();
-    let points = compress(&spheres, &u, Kernel::new(kind, 1.0)?)
-        .map_err(|e| format!("nonlocal reference (kernel {}, nu {nu}): {e}", kind.name()))?;
+    let mut done = 0usize;
+    let points = compress_with(&spheres, &u, Kernel::new(kind, 1.0)?, &mut |_| {
+        done += 1;
+        progress(done as f64 / (steps + 1) as f64);
+    })
+    .map_err(|e| format!("nonlocal reference (kernel {}, nu {nu}): {e}", kind.name()))?;
     Ok((points.iter().map(|p| (p.phi, p.sigma_piston)).collect(), t.elapsed().as_secs_f64()))
 }
 
@@ -267,16 +305,13 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         s.nonlocal_steps,
         if opts.quick { " Quick mode: 4× piston speed, two ν — a smoke test, not the paper's numbers." } else { "" }
     );
-    // The part of the case done, for the time-left estimate: stages (start state, reference, one
-    // model run each) finished over stages planned. The γ ladder may stop early and the calibrated
-    // runs may be absent; a ν that ends counts all its planned stages as done.
-    let planned_per_nu = 3 + GAMMA_LADDER.len() + 1 + if opts.quick { 0 } else { 3 };
-    let planned = (planned_per_nu * s.nus.len()) as f64;
-    let stages_done = AtomicUsize::new(0);
-    let tell = |finished: usize| {
-        let done = stages_done.fetch_add(finished, Ordering::Relaxed) + finished;
+    // The part of the case done, for the time-left estimate (see `Stages`).
+    let planned_per_nu = Stages::planned_per_nu(opts.quick);
+    let stages = Stages { done_milli: AtomicUsize::new(0), planned: planned_per_nu * s.nus.len() };
+    let tell = |milli: usize| {
+        let f = stages.add(milli);
         if let Some(p) = &opts.progress {
-            p.fraction("uniaxial", done as f64 / planned);
+            p.fraction("uniaxial", f);
         }
     };
     // One ν per core: each ν is an independent chain (start state, reference, models).
@@ -286,21 +321,35 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             (&mut r.rows, &mut r.models, &mut r.targets, &mut r.unstable, &mut r.md);
         // What this ν is on, for the progress display (one line per model run, not per step).
         let key = format!("nu={nu}");
-        let started = Cell::new(0usize);
-        let note = |what: &str| {
-            if started.get() > 0 {
-                tell(1);
-            }
-            started.set(started.get() + 1);
+        // This ν's running stage: its weight and the thousandths of it told so far; and the
+        // thousandths of the whole chain told so far.
+        let (stage, told, chain) = (Cell::new(0usize), Cell::new(0usize), Cell::new(0usize));
+        let finish_stage = || {
+            let rest = (stage.get() * 1000).saturating_sub(told.get());
+            tell(rest);
+            chain.set(chain.get() + rest);
+            told.set(0);
+        };
+        let note_weighted = |what: &str, weight: usize| {
+            finish_stage();
+            stage.set(weight);
             if let Some(p) = &opts.progress {
                 p.detail("uniaxial", &key, format!("{key}: {what}"));
             }
         };
+        let note = |what: &str| note_weighted(what, 1);
+        // Part `f` (0..1) of the running stage is done.
+        let partial = |f: f64| {
+            let now = ((f.clamp(0.0, 1.0) * (stage.get() * 1000) as f64) as usize).max(told.get());
+            tell(now - told.get());
+            chain.set(chain.get() + now - told.get());
+            told.set(now);
+        };
         let dir = scratch.join(format!("nu{nu}"));
         note("start state");
         let (dump, data) = start_state(nu, &s, &dir)?;
-        note("nonlocal reference");
-        let (refc, ref_secs) = reference(&dump, nu, kind, s.nonlocal_steps)?;
+        note_weighted("nonlocal reference", Stages::REFERENCE);
+        let (refc, ref_secs) = reference(&dump, nu, kind, s.nonlocal_steps, &mut |f| partial(f))?;
         push_curve(rows, &format!("nonlocal_{}", kind.name()), format!("nu={nu}"), &refc);
         models.push(ModelSummary {
             model: format!("nonlocal_{} nu={nu}", kind.name()),
@@ -443,8 +492,10 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
             },
         )?;
         let _ = writeln!(md, "\n![ν = {nu}]({file})\n");
-        // The last stage and any planned stage that did not run.
-        tell(planned_per_nu.saturating_sub(started.get().saturating_sub(1)));
+        // The last stage and any planned stage that did not run (a γ ladder stopped early, no
+        // calibrated law for this ν).
+        finish_stage();
+        tell((planned_per_nu * 1000).saturating_sub(chain.get()));
         Ok(r)
     };
     let results: Vec<Result<NuResult, String>> = s
