@@ -124,6 +124,11 @@ impl Deck {
         if a[2] != "region" || a.len() != 4 {
             return Err(unsupported(&format!("group style {} (only 'group ID region REGION')", a[2])));
         }
+        // As LAMMPS ("Group command before simulation box is defined"): a restart read later
+        // brings its own groups.
+        if self.world.domain.is_none() {
+            return Err(format!("group {name}: before the simulation box exists"));
+        }
         let region =
             self.regions.get(a[3]).ok_or_else(|| format!("group {name}: unknown region {}", a[3]))?;
         let k = match self.groups.list.iter().position(|g| g.name == name) {

@@ -159,6 +159,7 @@ fn bad_lattice_tet_group_and_momentum_input_stops_with_the_reason() {
         (format!("{BASE}fix mo all momentum 1 linear 1 1 0\n"), vec![], "group all has no atoms"),
         (format!("{BASE}fix i nope nve/sphere\n"), vec![], "fix i nve/sphere: no group nope"),
         (format!("{BASE}fix i all nve/sphere\nfix j all nve/sphere\n"), vec![], "a second integration fix"),
+        ("units si\nregion box block -1 1 -1 1 -1 1 units box\ngroup g region box\n".to_string(), vec![], "in.test:3: group g: before the simulation box exists"),
         (format!("{BASE}reset_timestep -5\n"), vec![], "in.test:6: reset_timestep: N must be >= 0"),
         (format!("{BASE}reset_timestep 5 every 2\n"), vec![], "expected 'reset_timestep N'"),
         (format!("{BASE}dump d all custom 1 x.dump id x\nreset_timestep 5\n"), vec![], "unsupported reset_timestep after a dump"),
