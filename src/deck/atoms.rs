@@ -110,9 +110,12 @@ impl Deck {
     }
 
     pub(super) fn create_atoms(&mut self, a: &[&str]) -> R<()> {
+        if a.len() >= 3 && matches!(a[2], "region" | "box") {
+            return self.create_atoms_lattice(a);
+        }
         if a.len() < 6 || a[2] != "single" {
             return Err(unsupported(
-                "create_atoms style (only 'create_atoms TYPE single x y z [units box]')",
+                "create_atoms style (only 'create_atoms TYPE single x y z [units box]', 'TYPE region ID' or 'TYPE box')",
             ));
         }
         if a.len() > 6 && !(a.len() == 8 && a[6] == "units" && a[7] == "box") {
@@ -132,7 +135,7 @@ impl Deck {
 
     pub(super) fn set(&mut self, a: &[&str]) -> R<()> {
         if a.len() < 5 {
-            return Err("set: expected 'set atom|type ID keyword value …'".into());
+            return Err("set: expected 'set atom|type|group ID keyword value …'".into());
         }
         let sel: Vec<usize> = match a[1] {
             "atom" if a[2] == "*" => (0..self.world.p.len()).collect(),
@@ -140,6 +143,10 @@ impl Deck {
             "type" => {
                 let t = int(a[2])? as usize;
                 (0..self.world.p.len()).filter(|&i| self.world.p.typ[i] + 1 == t).collect()
+            }
+            "group" => {
+                let bit = self.groups.bit(a[2], "set group")?;
+                (0..self.world.p.len()).filter(|&i| self.world.p.mask[i] & bit != 0).collect()
             }
             other => return Err(unsupported(&format!("set style {other}"))),
         };

@@ -24,6 +24,7 @@ const COMMANDS: &[(&str, Handler)] = &[
     ("read_data", read_data),
     ("read_restart", Deck::read_restart),
     ("write_restart", Deck::write_restart),
+    ("lattice", Deck::lattice),
     ("create_atoms", Deck::create_atoms),
     ("set", Deck::set),
     ("velocity", Deck::velocity),
@@ -49,6 +50,7 @@ const COMMANDS: &[(&str, Handler)] = &[
     ("include", Deck::include),
     ("if", Deck::if_command),
     ("print", print),
+    ("reset_timestep", Deck::reset_timestep),
     ("run", Deck::run),
 ];
 

@@ -12,6 +12,7 @@ pub mod expr;
 mod fixes;
 pub mod format;
 mod groups;
+mod lattice;
 mod lexer;
 mod local;
 pub mod output;
@@ -20,6 +21,7 @@ mod regions;
 mod restart;
 mod run;
 mod scope;
+mod tet_mesh;
 mod thermo;
 mod variables;
 mod vtk;
@@ -31,7 +33,9 @@ use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::engine::{Closure, CylinderWall, Domain, Mesh, PlaneWall, StepError, WallFix, WallGeom, World};
+use crate::engine::{
+    Closure, CylinderWall, Domain, Mesh, PlaneWall, StepError, WallFix, WallGeom, World, GROUP_ALL,
+};
 use crate::physics::hertz::Tangential;
 use crate::physics::{Material, MprTest, Vec3};
 use lexer::strip_comment;
@@ -151,6 +155,8 @@ enum FixKind {
     Insert,
     /// `check/timestep/gran`: index into `Deck::checks`.
     CheckTimestep(usize),
+    /// `momentum`: its entry in `Deck::momenta` (by fix ID).
+    Momentum,
 }
 
 #[derive(Debug, Clone)]
@@ -177,6 +183,8 @@ struct Deck {
     fixes: Vec<(String, FixKind)>,
     computes: HashMap<String, ComputeKind>,
     regions: HashMap<String, regions::Region>,
+    /// `lattice`: the sites `create_atoms … region` fills.
+    lattice: Option<lattice::Lattice>,
     groups: groups::Groups,
     /// `thermo_modify lost`: error (the default), ignore or warn.
     lost_policy: String,
@@ -201,6 +209,8 @@ struct Deck {
     aves: Vec<Option<AveTime>>,
     /// `fix check/timestep/gran` (`None` after `unfix`).
     checks: Vec<Option<fixes::check_timestep::CheckTimestep>>,
+    /// `fix momentum`, in definition order.
+    momenta: Vec<fixes::momentum::Momentum>,
     progress: bool,
     quiet: bool,
     /// Multi-contact approximations given on the command line (they override the deck's; 0: none).
@@ -270,6 +280,7 @@ impl Deck {
             fixes: Vec::new(),
             computes: HashMap::new(),
             regions: HashMap::new(),
+            lattice: None,
             groups: Default::default(),
             lost_policy: "error".into(),
             insertion: Default::default(),
@@ -287,6 +298,7 @@ impl Deck {
             pair_locals: HashMap::new(),
             aves: Vec::new(),
             checks: Vec::new(),
+            momenta: Vec::new(),
             progress: opts.progress,
             quiet: opts.quiet,
             cli_geometry_tolerance: opts.mc_geometry_tolerance,

@@ -1,5 +1,5 @@
-//! `region ID block|cylinder|sphere …`: the box (`create_box`) and the volumes `fix insert/pack`
-//! fills.
+//! `region ID block|cylinder|sphere|mesh/tet …`: the box (`create_box`), the volumes `fix
+//! insert/pack` fills, the volumes of `group` and `create_atoms`.
 
 use super::*;
 
@@ -21,6 +21,8 @@ pub(super) enum Region {
         c: Vec3,
         r: f64,
     },
+    /// `mesh/tet`: the tetrahedra of a VTK mesh ([`tet_mesh`]).
+    TetMesh(Box<tet_mesh::TetMesh>),
 }
 
 impl Region {
@@ -30,6 +32,7 @@ impl Region {
             Region::Block(b) => (b[1] - b[0]) * (b[3] - b[2]) * (b[5] - b[4]),
             Region::Cylinder { r, lo, hi, .. } => std::f64::consts::PI * r * r * (hi - lo),
             Region::Sphere { r, .. } => 4.0 / 3.0 * std::f64::consts::PI * r * r * r,
+            Region::TetMesh(m) => m.volume(),
         }
     }
 
@@ -46,6 +49,7 @@ impl Region {
                 (l, h)
             }
             Region::Sphere { c, r } => (c - Vec3::new(*r, *r, *r), c + Vec3::new(*r, *r, *r)),
+            Region::TetMesh(m) => m.bounds(),
         }
     }
 
@@ -61,6 +65,9 @@ impl Region {
                 a - margin >= *lo && a + margin <= *hi && (du * du + dv * dv).sqrt() + margin <= *r
             }
             Region::Sphere { c, r } => (x - c).norm() + margin <= *r,
+            // Only centres are tested against a tet mesh (insertion into one is refused, see
+            // `Deck::insert_pack`): LIGGGHTS has no distance to its surface either.
+            Region::TetMesh(m) => margin == 0.0 && m.holds(x),
         }
     }
 }
@@ -131,7 +138,12 @@ impl Deck {
                 }
                 (Region::Sphere { c, r }, 4)
             }
-            other => return Err(unsupported(&format!("region style {other} (block, cylinder or sphere)"))),
+            "mesh/tet" => self.region_mesh_tet(a)?,
+            other => {
+                return Err(unsupported(&format!(
+                    "region style {other} (block, cylinder, sphere or mesh/tet)"
+                )))
+            }
         };
         let mut k = 3 + nargs;
         while k < a.len() {

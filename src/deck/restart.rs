@@ -4,8 +4,10 @@
 //! boundary styles, the number of atom types, and the engine's state (particles in memory order,
 //! pair and wall contact histories, step, time step; see [`crate::engine::EngineState`]). As with
 //! LIGGGHTS, the continuing deck defines materials, pair style, walls and fixes again, the walls in
-//! the same order (wall contact histories name walls by their order). Insertion and averaging
-//! fixes start afresh there. A file that is not an mcdem restart stops with an error saying so.
+//! the same order (wall contact histories name walls by their order). The groups (names, and the
+//! particles' mask bits) are kept, and so is the state of each `fix insert/stream`, which a fix of
+//! the same ID in the continuing deck takes up, as LIGGGHTS does; other insertion and averaging
+//! fixes start afresh. A file that is not an mcdem restart stops with an error saying so.
 
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +28,12 @@ struct RestartFile {
     /// The box as created (the minimum of a `boundary m` axis), once known.
     box0: Option<([f64; 3], [f64; 3])>,
     engine: EngineState,
+    /// The deck's groups in mask-bit order (bit 1 first; LAMMPS restarts keep groups too).
+    #[serde(default)]
+    groups: Vec<String>,
+    /// The state of each `fix insert/stream` (LIGGGHTS restarts keep their insertion fixes').
+    #[serde(default)]
+    streams: Vec<fixes::stream::StreamState>,
 }
 
 impl Deck {
@@ -52,6 +60,8 @@ impl Deck {
             boundary,
             box0: self.box0.map(|(lo, hi)| ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])),
             engine: self.world.restart_state()?,
+            groups: self.groups.names(),
+            streams: self.insertion.stream_states(),
         };
         let text = serde_json::to_string(&file).map_err(|e| format!("write_restart: {e}"))?;
         let path = PathBuf::from(&name);
@@ -121,10 +131,15 @@ impl Deck {
         let v = |a: [f64; 3]| Vec3::new(a[0], a[1], a[2]);
         self.box0 = file.box0.map(|(lo, hi)| (v(lo), v(hi)));
         self.groups.particles_added(None)?;
+        let (contacts, streams) = (file.engine.pairs.len() + file.engine.wall_contacts.len(), file.streams);
+        self.insertion.restore_streams(streams);
+        self.groups
+            .restore(&file.groups, &self.world.p.mask)
+            .map_err(|e| format!("read_restart: {}: {e}", a[1]))?;
         self.say(&format!(
             "INFO: read_restart: {} particles, {} contact histories at step {} from {}",
             self.world.p.len(),
-            file.engine.pairs.len() + file.engine.wall_contacts.len(),
+            contacts,
             self.world.step,
             a[1]
         ));

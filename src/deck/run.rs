@@ -104,6 +104,7 @@ impl Deck {
         };
         self.insert_pending()?;
         self.set_up_world()?;
+        self.momentum_setup();
         // As in LIGGGHTS, the setup of a run is an end of step for the averaging fixes.
         self.sample_ave_times()?;
         self.say("Setting up run ...");
@@ -156,6 +157,7 @@ impl Deck {
                 self.instability = Some(e);
                 m
             })?;
+            self.apply_momenta();
             self.stream_release();
             self.shrink_wrap();
             let last = self.world.step == end;

@@ -28,7 +28,8 @@ impl World {
         self.wall_search.wall_travel += travel;
     }
 
-    /// First half of velocity Verlet: half-kick, drift, rotational half-kick. On the team's
+    /// First half of velocity Verlet: half-kick, drift, rotational half-kick (of the particles of
+    /// [`World::integrate_group`] only, when it is set). On the team's
     /// threads each member moves its own range of particles (the range it will also finish and,
     /// roughly, the particles of its pair block): a particle's state then stays in one core's
     /// cache from step to step instead of travelling between them.
@@ -36,10 +37,14 @@ impl World {
         let (dtf, dtv) = (0.5 * self.dt, self.dt);
         let dtfrot = dtf / INERTIA;
         let n = self.p.len();
+        let group = self.integrate_group;
         let p = &mut self.p;
-        let (f, torque, mass, radius) = (&p.f, &p.torque, &p.mass, &p.radius);
+        let (f, torque, mass, radius, mask) = (&p.f, &p.torque, &p.mass, &p.radius, &p.mask);
         let kick = |r: Range<usize>, x: &mut [Vec3], v: &mut [Vec3], omega: &mut [Vec3]| {
             for (i, ((x, v), omega)) in r.zip(x.iter_mut().zip(v.iter_mut()).zip(omega.iter_mut())) {
+                if group.is_some_and(|bit| mask[i] & bit == 0) {
+                    continue;
+                }
                 let dtfm = dtf / mass[i];
                 *v += dtfm * f[i];
                 *x += dtv * *v;
@@ -67,11 +72,15 @@ impl World {
     pub(super) fn final_integrate(&mut self) -> Result<(), StepError> {
         let dtf = 0.5 * self.dt;
         let dtfrot = dtf / INERTIA;
-        let (n, step) = (self.p.len(), self.step);
+        let (n, step, group) = (self.p.len(), self.step, self.integrate_group);
         let p = &mut self.p;
-        let (f, torque, mass, radius, x, id) = (&p.f, &p.torque, &p.mass, &p.radius, &p.x, &p.id);
+        let (f, torque, mass, radius, x, id, mask) =
+            (&p.f, &p.torque, &p.mass, &p.radius, &p.x, &p.id, &p.mask);
         let kick = |r: Range<usize>, v: &mut [Vec3], omega: &mut [Vec3]| {
             for (i, (v, omega)) in r.zip(v.iter_mut().zip(omega.iter_mut())) {
+                if group.is_some_and(|bit| mask[i] & bit == 0) {
+                    continue;
+                }
                 let dtfm = dtf / mass[i];
                 *v += dtfm * f[i];
                 let dtirot = dtfrot / (radius[i] * radius[i] * mass[i]);

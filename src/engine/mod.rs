@@ -45,7 +45,7 @@ pub use blocks::{PairThreads, THREAD_PROBE_STEPS};
 pub use contacts::PairContact;
 pub use domain::Domain;
 pub use mesh::Mesh;
-pub use particles::Particles;
+pub use particles::{Particles, GROUP_ALL};
 pub use restart::{EngineState, ParticleState, WallContactState};
 pub use walls::{CylinderWall, PlaneWall, WallFix, WallGeom};
 pub use world::{Closure, StepError, World};

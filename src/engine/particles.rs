@@ -23,7 +23,13 @@ pub struct Particles {
     pub density: Vec<f64>,
     /// Periodic image counts (LAMMPS ix iy iz).
     pub image: Vec<[i32; 3]>,
+    /// Group membership, one bit per group as in LAMMPS' `atom->mask`: bit 0 is `all` (every
+    /// particle has it), the deck's groups take the next bits in the order they are defined.
+    pub mask: Vec<u32>,
 }
+
+/// The mask bit of group `all`.
+pub const GROUP_ALL: u32 = 1;
 
 impl Particles {
     pub fn len(&self) -> usize {
@@ -48,6 +54,7 @@ impl Particles {
         self.mass.push(sphere_mass(r, density));
         self.density.push(density);
         self.image.push([0; 3]);
+        self.mask.push(GROUP_ALL);
     }
 
     /// Recomputes the mass of particle `i` after a diameter or density change.
@@ -82,6 +89,7 @@ impl Particles {
         gather(&mut self.mass, old_of_new);
         gather(&mut self.density, old_of_new);
         gather(&mut self.image, old_of_new);
+        gather(&mut self.mask, old_of_new);
     }
 }
 

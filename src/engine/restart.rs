@@ -50,6 +50,10 @@ pub struct ParticleState {
     pub mass: Vec<f64>,
     pub density: Vec<f64>,
     pub image: Vec<[i32; 3]>,
+    /// Group bits ([`super::particles::Particles::mask`]); absent in files written before groups
+    /// were saved, read then as `all` only.
+    #[serde(default)]
+    pub mask: Vec<u32>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -107,6 +111,7 @@ impl World {
                 mass: p.mass.clone(),
                 density: p.density.clone(),
                 image: p.image.clone(),
+                mask: p.mask.clone(),
             },
             pairs: c.pairs.iter().map(|q| [q.i, q.j]).collect(),
             pair_shear: c.pairs.iter().map(|q| a3(&q.shear)).collect(),
@@ -146,6 +151,7 @@ impl World {
             q.mass.len(),
             q.density.len(),
             q.image.len(),
+            if q.mask.is_empty() { n } else { q.mask.len() },
         ];
         if lens.iter().any(|&l| l != n) {
             return Err(format!("the particle arrays differ in length ({n} ids, others {lens:?})"));
@@ -181,6 +187,7 @@ impl World {
         p.mass = q.mass.clone();
         p.density = q.density.clone();
         p.image = q.image.clone();
+        p.mask = if q.mask.is_empty() { vec![super::particles::GROUP_ALL; n] } else { q.mask.clone() };
         let c = &mut self.contacts;
         c.pairs =
             s.pairs.iter().zip(&s.pair_shear).map(|(&[i, j], sh)| Pair { i, j, shear: v3(sh) }).collect();

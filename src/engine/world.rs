@@ -76,6 +76,10 @@ pub struct World {
     pub mc_range: f64,
     /// Is each particle integrated (`fix nve/sphere` present)?
     pub integrate: bool,
+    /// `fix nve/sphere` of a group that may not hold every particle: only particles with this
+    /// mask bit move (LAMMPS: the others keep position and velocity, forces act on them but are
+    /// not integrated). `None`: every particle, the plain loop.
+    pub integrate_group: Option<u32>,
     /// Number of neighbour-list builds so far.
     pub builds: u64,
     /// LIGGGHTS 3.8 `surface multicontact` radius convention in pairs: the first particle of a
@@ -238,6 +242,13 @@ impl World {
         }
         self.blocks.end_step(self.step, timer);
         Ok(())
+    }
+
+    /// `reset_timestep`: the step counter becomes `step`; the next spatial sort stays as many
+    /// steps ahead.
+    pub fn reset_step(&mut self, step: u64) {
+        self.lists.next_sort = (self.lists.next_sort + step).saturating_sub(self.step);
+        self.step = step;
     }
 
     /// Force and torque on every particle and force on every mesh, stage by stage: wall contacts

@@ -256,19 +256,27 @@ fn periodic_insertion_refills_its_region_into_its_group_until_unfixed() {
 }
 
 #[test]
-fn a_group_that_misses_particles_is_refused_naming_the_fix() {
-    // Particles inserted into `all` are not in `g`: nve/sphere on `g` would leave them still.
+fn a_group_that_misses_particles_is_integrated_alone_and_refused_elsewhere() {
+    // Particles inserted into `all` are not in `g`: nve/sphere of `g` leaves them where they were
+    // inserted (as LIGGGHTS), so none falls out of the created box, and the refills find the slab
+    // full.
     let d = refill_deck().replace("fix ins g insert/pack", "fix ins all insert/pack");
     let (ok, out, _) = run_deck(&d, &[]);
-    assert!(
-        !ok && out.contains("fix integr nve/sphere on group g, which does not hold every particle"),
-        "{out}"
-    );
-    assert!(out.contains("in.test:"), "file and line: {out}");
-    // A particle added after a fix acts on `g`, outside it.
-    let d = refill_deck().replace("run 1600", "create_atoms 1 single 0 0 0 units box\nrun 1600");
+    assert!(ok, "{out}");
+    let rows = thermo_rows(&out);
+    let last = rows.last().unwrap();
+    assert_eq!((last.0, last.1, last.2), (2600, 20, 8e-6), "{out}");
+    // A compute acts on every particle: of `g`, it is refused.
+    let d = d.replace("fix integr g nve/sphere", "fix integr g nve/sphere\ncompute k g ke");
     let (ok, out, _) = run_deck(&d, &[]);
-    assert!(!ok && out.contains("fix integr nve/sphere acts on group g"), "{out}");
+    assert!(!ok && out.contains("compute k ke on group g, which does not hold every particle"), "{out}");
+    assert!(out.contains("in.test:"), "file and line: {out}");
+    // A particle added after a compute acts on `g`, outside it.
+    let d = refill_deck()
+        .replace("fix integr g nve/sphere", "fix integr g nve/sphere\ncompute k g ke")
+        .replace("run 1600", "create_atoms 1 single 0 0 0 units box\nrun 1600");
+    let (ok, out, _) = run_deck(&d, &[]);
+    assert!(!ok && out.contains("compute k ke acts on group g"), "{out}");
     // Group styles other than region, and unknown groups.
     for (from, to, says) in [
         ("group g region box", "group g type 1", "group style type"),

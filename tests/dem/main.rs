@@ -9,6 +9,7 @@ mod common;
 mod against_liggghts;
 mod conservation;
 mod deck;
+mod groups_lattice;
 mod insert;
 mod mc_advanced;
 mod mc_approximations;

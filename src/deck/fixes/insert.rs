@@ -24,9 +24,31 @@ pub(in crate::deck) struct Insertion {
     periodic: Vec<(Pack, u64)>,
     /// `fix insert/stream` insertions.
     pub(super) streams: Vec<super::stream::Stream>,
+    /// Insertion states read from a restart file, waiting for a `fix insert/stream` of their ID.
+    pub(super) restored: Vec<super::stream::StreamState>,
 }
 
 impl Insertion {
+    /// The state of each `fix insert/stream`, for a restart file.
+    pub(in crate::deck) fn stream_states(&self) -> Vec<super::stream::StreamState> {
+        self.streams.iter().map(super::stream::Stream::state).collect()
+    }
+
+    /// A restart file's insertion states, taken up by the fixes of their IDs defined next.
+    pub(in crate::deck) fn restore_streams(&mut self, states: Vec<super::stream::StreamState>) {
+        self.restored = states;
+    }
+
+    /// `reset_timestep`: each `insert_every` insertion's next step moved by `shift`.
+    pub(super) fn shift_steps(&mut self, shift: &dyn Fn(u64) -> u64) {
+        for (_, next) in &mut self.periodic {
+            *next = shift(*next);
+        }
+        for s in &mut self.streams {
+            s.shift_steps(shift);
+        }
+    }
+
     pub(super) fn has_distribution(&self, id: &str) -> bool {
         self.distributions.contains_key(id)
     }
@@ -124,6 +146,8 @@ struct Pack {
     label: String,
     /// The fix ID (`unfix` stops its insertions).
     fix: String,
+    /// The mask bit of the fix's group, which its particles join.
+    bit: u32,
     /// Steps between insertions (`insert_every N`); `None`: once.
     every: Option<u64>,
     /// Insertions done so far: each draws from its own random stream.
@@ -309,9 +333,13 @@ impl Deck {
                     dist = Some(v.to_string());
                 }
                 "region" => {
-                    region = Some(
-                        self.regions.get(v).cloned().ok_or_else(|| format!("{what}: unknown region {v}"))?,
-                    )
+                    let r =
+                        self.regions.get(v).cloned().ok_or_else(|| format!("{what}: unknown region {v}"))?;
+                    // Random points in tetrahedra (LIGGGHTS' `generate_random`) are not implemented.
+                    if matches!(r, Region::TetMesh(_)) {
+                        return Err(unsupported(&format!("{what} into region {v} of style mesh/tet")));
+                    }
+                    region = Some(r)
                 }
                 "particles_in_region" => {
                     let n = int(v)?;
@@ -370,6 +398,7 @@ impl Deck {
         let pack = Pack {
             label,
             fix: a[1].to_string(),
+            bit: self.groups.bit(a[2], &what)?,
             every,
             round: 0,
             seed: s.ok_or_else(|| format!("{what}: seed is required"))?,
@@ -595,6 +624,7 @@ impl Deck {
             let i = self.world.p.len() - 1;
             self.world.p.v[i] = pack.vel;
             self.world.p.omega[i] = pack.omega;
+            self.world.p.mask[i] |= pack.bit;
             placed += 1;
         }
         if placed < n {

@@ -3,7 +3,9 @@
 mod ave_time;
 pub(super) mod check_timestep;
 pub(super) mod insert;
-mod stream;
+pub(super) mod momentum;
+mod reset_timestep;
+pub(super) mod stream;
 mod walls;
 
 use super::*;
@@ -15,10 +17,11 @@ impl Deck {
         }
         let (id, group, style) = (a[1], a[2], a[3]);
         // An insertion fix's group is where its particles go; any other fix acts on its group.
+        // `nve/sphere` and `momentum` act on their group's members (mask bits), whatever it holds.
         if style.starts_with("insert/") {
             self.groups.check_exists(group, &format!("fix {id} {style}"))?;
             self.groups.particles_added(Some(group))?;
-        } else {
+        } else if !matches!(style, "nve/sphere" | "momentum") {
             self.groups.act_on(group, &format!("fix {id} {style}"))?;
         }
         if self.fixes.iter().any(|(n, _)| n == id) {
@@ -54,7 +57,12 @@ impl Deck {
                 if a.len() > 4 {
                     return Err(unsupported("fix nve/sphere keywords"));
                 }
+                if self.world.integrate {
+                    return Err(unsupported(&format!("fix {id} nve/sphere: a second integration fix")));
+                }
+                let bit = self.groups.bit(group, &format!("fix {id} nve/sphere"))?;
                 self.world.integrate = true;
+                self.world.integrate_group = (bit != GROUP_ALL).then_some(bit);
                 FixKind::Nve
             }
             "deform" => {
@@ -106,6 +114,7 @@ impl Deck {
             "insert/pack" => self.insert_pack(a)?,
             "insert/stream" => self.insert_stream(a)?,
             "check/timestep/gran" => self.check_timestep(a)?,
+            "momentum" => self.momentum(a)?,
             other => return Err(unsupported(&format!("fix style {other}"))),
         };
         self.fixes.push((id.into(), kind));
@@ -120,7 +129,11 @@ impl Deck {
         match kind {
             FixKind::Property => {}
             FixKind::Gravity => self.world.gravity = None,
-            FixKind::Nve => self.world.integrate = false,
+            FixKind::Nve => {
+                self.world.integrate = false;
+                self.world.integrate_group = None;
+            }
+            FixKind::Momentum => self.momenta.retain(|m| m.fix != id),
             FixKind::MoveMesh(m) => self.world.meshes[m].velocity = Vec3::zeros(),
             // An inactive wall keeps its slot so wall-contact keys stay valid.
             FixKind::Wall(w) => self.world.walls[w].geom = WallGeom::Meshes(Vec::new()),

@@ -37,6 +37,20 @@ enum Total {
     Unlimited,
 }
 
+/// What a restart file keeps of a `fix insert/stream`. LIGGGHTS restores an insertion fix's
+/// state when the continuing deck defines one with the same ID (`Resetting global state of Fix …
+/// from restart file info`); so does mcdem: the next insertion step, the insertions and particles
+/// done (the `nparticles` budget continues), and the particles still flying towards the face.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub(in crate::deck) struct StreamState {
+    fix: String,
+    due: u64,
+    round: u64,
+    inserted: usize,
+    /// Particles in flight: id, insertion point, insertion step, release step.
+    flying: Vec<(i64, [f64; 3], u64, u64)>,
+}
+
 /// A particle still flying towards the face: where and when it was inserted, when it is
 /// released.
 #[derive(Debug, Clone)]
@@ -51,6 +65,8 @@ struct Flight {
 pub(in crate::deck) struct Stream {
     label: String,
     pub(super) fix: String,
+    /// The mask bit of the fix's group, which its particles join.
+    bit: u32,
     seed: u64,
     dist: String,
     /// Insertions done so far: each draws from its own random stream.
@@ -87,6 +103,30 @@ struct Geometry {
     p_ref: Vec3,
     /// Cumulative triangle areas (for area-weighted picks).
     cum: Vec<f64>,
+}
+
+impl Stream {
+    pub(in crate::deck) fn state(&self) -> StreamState {
+        StreamState {
+            fix: self.fix.clone(),
+            due: self.due,
+            round: self.round,
+            inserted: self.inserted,
+            flying: self
+                .flying
+                .iter()
+                .map(|f| (f.id, [f.x0.x, f.x0.y, f.x0.z], f.inserted, f.release))
+                .collect(),
+        }
+    }
+
+    /// `reset_timestep`: the next insertion and the flights' steps moved by `shift`.
+    pub(super) fn shift_steps(&mut self, shift: &dyn Fn(u64) -> u64) {
+        self.due = shift(self.due);
+        for f in &mut self.flying {
+            (f.inserted, f.release) = (shift(f.inserted), shift(f.release));
+        }
+    }
 }
 
 impl Deck {
@@ -191,6 +231,7 @@ impl Deck {
         let stream = Stream {
             label,
             fix: a[1].to_string(),
+            bit: self.groups.bit(a[2], &what)?,
             seed: s.ok_or_else(|| format!("{what}: seed is required"))?,
             dist: dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
             round: 0,
@@ -212,7 +253,33 @@ impl Deck {
             flying: Vec::new(),
         };
         self.insertion.check_distinct_seed(&what, stream.seed, &stream.dist)?;
-        self.geometry(&stream).map_err(|e| format!("{what}: {e}"))?;
+        let g = self.geometry(&stream).map_err(|e| format!("{what}: {e}"))?;
+        let mut stream = stream;
+        if let Some(k) = self.insertion.restored.iter().position(|r| r.fix == stream.fix) {
+            let r = self.insertion.restored.remove(k);
+            if let Some(&(id, ..)) = r.flying.iter().find(|f| !self.world.p.id.contains(&f.0)) {
+                return Err(format!(
+                    "{what}: the restart's particle {id} in flight is not among the particles"
+                ));
+            }
+            (stream.due, stream.round, stream.inserted, stream.vn) = (r.due, r.round, r.inserted, g.vn);
+            stream.flying = r
+                .flying
+                .iter()
+                .map(|&(id, x, inserted, release)| Flight {
+                    id,
+                    x0: Vec3::new(x[0], x[1], x[2]),
+                    inserted,
+                    release,
+                })
+                .collect();
+            self.say(&format!(
+                "INFO: {what}: continues from the restart file: {} particles inserted, {} in flight, next insertion at step {}",
+                stream.inserted,
+                stream.flying.len(),
+                stream.due
+            ));
+        }
         self.insertion.streams.push(stream);
         Ok(FixKind::Insert)
     }
@@ -357,6 +424,7 @@ impl Deck {
             let Some(x) = at else { break };
             grid.add(x, r);
             let i = self.add_inserted(&templates[j], x, r, g.vn, Vec3::zeros());
+            self.world.p.mask[i] |= s.bit;
             let depth = (g.p_ref - x).dot(&g.normal);
             let release = step + ((depth + TINY) / (speed * self.world.dt)) as u64;
             flights.push(Flight { id: self.world.p.id[i], x0: x, inserted: step, release });
