@@ -5,6 +5,7 @@
 //! stops with `ERROR: FILE:LINE: unsupported …`,
 //! because a silently ignored setting would give a different simulation.
 
+mod atom_vars;
 mod atoms;
 mod commands;
 mod dumps;
@@ -129,6 +130,8 @@ enum Var {
         at: usize,
     },
     Equal(String),
+    /// `variable NAME atom EXPR`: one value per particle (see `atom_vars.rs`).
+    Atom(String),
     /// `variable NAME loop N1 N2`: the current value, advanced by `next` up to `last`.
     Loop {
         value: i64,
@@ -151,6 +154,12 @@ enum FixKind {
     Insert,
     /// `check/timestep/gran`: index into `Deck::checks`.
     CheckTimestep(usize),
+    /// `adapt N atom diameter v_NAME`: every `every` steps (and at each run's set-up) the
+    /// diameters become the variable's values (`fixes/adapt.rs`).
+    Adapt {
+        every: u64,
+        var: String,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -162,6 +171,8 @@ enum ComputeKind {
     Stress,
     /// Coordination number Z = 2 N_c / N (particle–particle contacts).
     Coord,
+    /// `property/atom`: per-particle columns, read by atom-style variables (`atom_vars.rs`).
+    PropertyAtom(Vec<Col>),
 }
 
 struct Deck {
