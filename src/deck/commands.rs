@@ -241,6 +241,11 @@ fn compute(d: &mut Deck, a: &[&str]) -> R<()> {
         d.pair_locals.insert(a[1].into(), local::PairLocal::parse(&a[4..])?);
         return Ok(());
     }
+    if a[3] == "property/atom" {
+        let cols = atom_vars::property_atom(a[1], &a[4..])?;
+        d.computes.insert(a[1].into(), ComputeKind::PropertyAtom(cols));
+        return Ok(());
+    }
     let kind = match a[3] {
         "erotate/sphere" => ComputeKind::ERotate,
         "ke" => ComputeKind::Ke,

@@ -5,6 +5,7 @@
 //! stops with `ERROR: FILE:LINE: unsupported …`,
 //! because a silently ignored setting would give a different simulation.
 
+mod atom_vars;
 mod atoms;
 mod commands;
 mod dumps;
@@ -133,6 +134,8 @@ enum Var {
         at: usize,
     },
     Equal(String),
+    /// `variable NAME atom EXPR`: one value per particle (see `atom_vars.rs`).
+    Atom(String),
     /// `variable NAME loop N1 N2`: the current value, advanced by `next` up to `last`.
     Loop {
         value: i64,
@@ -157,6 +160,12 @@ enum FixKind {
     CheckTimestep(usize),
     /// `momentum`: its entry in `Deck::momenta` (by fix ID).
     Momentum,
+    /// `adapt N atom diameter v_NAME`: every `every` steps (and at each run's set-up) the
+    /// diameters become the variable's values (`fixes/adapt.rs`).
+    Adapt {
+        every: u64,
+        var: String,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -168,6 +177,8 @@ enum ComputeKind {
     Stress,
     /// Coordination number Z = 2 N_c / N (particle–particle contacts).
     Coord,
+    /// `property/atom`: per-particle columns, read by atom-style variables (`atom_vars.rs`).
+    PropertyAtom(Vec<Col>),
 }
 
 struct Deck {

@@ -84,6 +84,19 @@ impl Deck {
         Ok(())
     }
 
+    /// An engine stop as the deck's error (kept in `instability` for callers that tell them apart).
+    fn engine_stop(&mut self, r: Result<(), StepError>) -> R<()> {
+        r.map_err(|e| {
+            let mut m = e.to_string();
+            let policy = &self.lost_policy;
+            if policy != "error" && m.contains("lost particle") {
+                m += &format!(" (thermo_modify lost {policy} asks to delete it; mcdem does not delete particles, so the run stops)");
+            }
+            self.instability = Some(e);
+            m
+        })
+    }
+
     pub(super) fn run(&mut self, a: &[&str]) -> R<()> {
         if a.len() < 2 {
             return Err("run: missing N".into());
@@ -103,6 +116,8 @@ impl Deck {
             n as u64
         };
         self.insert_pending()?;
+        // LIGGGHTS applies `fix adapt` in the set-up of every run, before the set-up forces.
+        self.adapt(true)?;
         self.set_up_world()?;
         self.momentum_setup();
         // As in LIGGGHTS, the setup of a run is an end of step for the averaging fixes.
@@ -148,15 +163,16 @@ impl Deck {
             if self.step_inserts() && self.insert_due()? {
                 self.set_up_world()?;
             }
-            let policy = &self.lost_policy;
-            self.world.step().map_err(|e| {
-                let mut m = e.to_string();
-                if policy != "error" && m.contains("lost particle") {
-                    m += &format!(" (thermo_modify lost {policy} asks to delete it; mcdem does not delete particles, so the run stops)");
-                }
-                self.instability = Some(e);
-                m
-            })?;
+            // The step in two halves: `fix adapt` changes radii between the neighbour check and
+            // the forces (LAMMPS `pre_force`).
+            let r = self.world.step_to_pre_force();
+            self.engine_stop(r)?;
+            if self.adapt(false)? {
+                let r = self.world.radii_changed();
+                self.engine_stop(r)?;
+            }
+            let r = self.world.step_from_pre_force();
+            self.engine_stop(r)?;
             self.apply_momenta();
             self.stream_release();
             self.shrink_wrap();

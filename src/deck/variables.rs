@@ -55,6 +55,11 @@ impl Deck {
                     Some(Var::List { values, at }) => values[*at].clone(),
                     Some(Var::Equal(f)) => format::g(self.eval_formula(f, 0)?, 15),
                     Some(Var::Loop { value, .. }) => value.to_string(),
+                    Some(Var::Atom(_)) => {
+                        return Err(format!(
+                            "variable {name} is atom-style (one value per particle): it cannot be substituted"
+                        ))
+                    }
                     None => return Err(format!("substitution for undefined variable {name}")),
                 };
                 out.push_str(&v);
@@ -85,6 +90,9 @@ impl Deck {
                     num(&values[*at]).map_err(|_| format!("variable {v} is not numeric"))
                 }
                 Some(Var::Loop { value, .. }) => Ok(*value as f64),
+                Some(Var::Atom(_)) => Err(format!(
+                    "variable {v} is atom-style (one value per particle): use it in an atom-style variable or fix adapt"
+                )),
                 None => Err(format!("unknown variable {v}")),
             };
         }
@@ -107,6 +115,9 @@ impl Deck {
                         12 => Ok(tr(&sk)),
                         k => Err(format!("compute {id} (stress/mcdem): index {k} out of range 1..12")),
                     }
+                }
+                (Some(ComputeKind::PropertyAtom(_)), _) => {
+                    Err(format!("compute {id} is per-atom (property/atom): use it in an atom-style variable"))
                 }
                 (Some(_), Some(k)) => Err(format!("compute {id} is a scalar: no index [{k}]")),
                 (None, _) => Err(format!("unknown compute {id}")),
@@ -240,6 +251,10 @@ impl Deck {
                 let f = a[3..].join(" ");
                 self.vars.insert(name, Var::Equal(f));
             }
+            "atom" => {
+                let f = a[3..].join(" ");
+                self.vars.insert(name, Var::Atom(f));
+            }
             "loop" => {
                 let (first, last) = match a.len() {
                     4 => (1, int(a[3])?),
@@ -273,7 +288,9 @@ impl Deck {
                     self.vars.remove(*v);
                     self.skip_jump = true;
                 }
-                Some(Var::Equal(_)) => return Err(format!("next: variable {v} is not a loop")),
+                Some(Var::Equal(_)) | Some(Var::Atom(_)) => {
+                    return Err(format!("next: variable {v} is not a loop"))
+                }
                 None => return Err(format!("next: unknown variable {v}")),
             }
         }

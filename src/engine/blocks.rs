@@ -53,6 +53,7 @@ pub(super) struct Blocks {
 
 /// The probe's timing of one step: started before the first stage when the probe times this
 /// step, with what [`StepTimer::leave_out`] excluded.
+#[derive(Debug)]
 pub(super) struct StepTimer {
     start: Option<Instant>,
     left_out: Duration,

@@ -20,6 +20,10 @@ pub(super) struct NeighborList {
     pub(super) le_travel: f64,
     /// Interaction cutoff without skin, 2 r_max × pair_reach, at the last build [m].
     pub(super) cut_build: f64,
+    /// Radii at the last build, and the largest growth of one since (set by
+    /// [`World::radii_changed`]; 0 while radii stay fixed) [m].
+    pub(super) r_build: Vec<f64>,
+    pub(super) growth: f64,
 }
 
 impl World {
@@ -42,9 +46,19 @@ impl World {
             } else {
                 self.lists.le_travel / (domain.hi.y - domain.lo.y)
             };
+            // A pair left out of the list was a skin apart beyond its radii at the build; radius
+            // growth g closes that gap like motion does, so each particle may travel only
+            // skin/2 - g (g the largest growth of any radius since the build).
+            let growth = self.lists.growth;
             let moved = if strain == 0.0 {
-                let lim = 0.25 * self.skin * self.skin;
-                self.p.x.iter().zip(&self.lists.x_build).any(|(x, x0)| (x - x0).norm_squared() > lim)
+                let half = 0.5 * self.skin - growth;
+                half <= 0.0
+                    || self
+                        .p
+                        .x
+                        .iter()
+                        .zip(&self.lists.x_build)
+                        .any(|(x, x0)| (x - x0).norm_squared() > half * half)
             } else {
                 let ymid = 0.5 * (domain.lo.y + domain.hi.y);
                 let m2 = self
@@ -58,7 +72,7 @@ impl World {
                         d.norm_squared()
                     })
                     .fold(0.0, f64::max);
-                let m = m2.sqrt();
+                let m = m2.sqrt() + growth;
                 2.0 * m + strain.abs() * (self.lists.cut_build + 2.0 * m) > self.skin
             };
             if !moved {
@@ -152,8 +166,46 @@ impl World {
         self.blocks.inc.clear();
         self.lists.x_build.clear();
         self.lists.x_build.extend_from_slice(&self.p.x);
+        self.lists.r_build.clear();
+        self.lists.r_build.extend_from_slice(&self.p.radius);
+        self.lists.growth = 0.0;
         self.lists.le_travel = 0.0;
         Ok(())
+    }
+
+    /// To be called after particle radii changed between the neighbour check and the forces of a
+    /// step (a deck's `fix adapt`): the skin test learns how far radii grew since the last build,
+    /// and the list is rebuilt now if that growth alone could already let a pair left out of it
+    /// touch (so the forces of this step see every contact, however fast the radii grow); the
+    /// time step is checked against the Rayleigh time of the new sizes.
+    pub fn radii_changed(&mut self) -> Result<(), StepError> {
+        let growth = if self.lists.r_build.len() == self.p.len() {
+            self.p.radius.iter().zip(&self.lists.r_build).map(|(r, r0)| r - r0).fold(0.0, f64::max)
+        } else {
+            // Particles added since the build: a rebuild is due anyway.
+            self.lists.need_build = true;
+            0.0
+        };
+        self.lists.growth = growth;
+        if let Some((t_r, i)) = self.rayleigh_worst() {
+            if self.dt > t_r {
+                return Err(StepError {
+                    step: self.step,
+                    particle: self.p.id[i],
+                    cause: format!(
+                        "after a radius change the time step {:e} s is above the Rayleigh time {:e} s: the run would be unstable",
+                        self.dt, t_r
+                    ),
+                    contact: None,
+                });
+            }
+        }
+        if self.lists.need_build || growth >= 0.5 * self.skin {
+            self.lists.need_build = true;
+        }
+        // Runs the skin test with the new growth: rebuilds when motion and growth together reach
+        // half a skin.
+        self.neighbor_check()
     }
 
     /// Centre distance, as a multiple of r_i + r_j, out to which a pair can matter: touching

@@ -67,6 +67,17 @@ impl Particles {
         }
         self.mass[i] = sphere_mass(self.radius[i], self.density[i]);
     }
+
+    /// Sets the diameter of particle `i` and rescales its mass so that its density stays, as
+    /// LIGGGHTS 3.8 `fix adapt ... atom diameter` does (`src/fix_adapt.cpp`, `change_settings`):
+    /// the density is taken from the current mass and radius, ρ = m / (4/3 π r³), and the new
+    /// mass is 4/3 π r'³ ρ.
+    pub fn set_diameter_keep_density(&mut self, i: usize, diameter: f64) {
+        let rho = self.mass[i] / sphere_mass(self.radius[i], 1.0);
+        self.radius[i] = 0.5 * diameter;
+        self.density[i] = rho;
+        self.mass[i] = sphere_mass(self.radius[i], rho);
+    }
 }
 
 impl Particles {

@@ -8,7 +8,7 @@ use crate::physics::pair::ContactError;
 use crate::physics::{Material, PairCoeffs, Vec3};
 use crate::team::Team;
 
-use super::blocks::{Blocks, PairThreads};
+use super::blocks::{Blocks, PairThreads, StepTimer};
 use super::contacts::Contacts;
 use super::multicontact::{McState, McType};
 use super::neighbor_list::NeighborList;
@@ -127,6 +127,8 @@ pub struct World {
     pub(super) lists: NeighborList,
     pub(super) blocks: Blocks,
     pub(super) pair_scratch: PairScratch,
+    /// The timer of a step split at its pre-force point ([`World::step_to_pre_force`]).
+    pub(super) step_timer: Option<StepTimer>,
 }
 
 impl World {
@@ -159,21 +161,7 @@ impl World {
                 return Err(format!("particle {}: radius and mass must be > 0", self.p.id[i]));
             }
         }
-        // Rayleigh time step (LIGGGHTS checks the same): above it the explicit scheme is unstable.
-        let mut worst: Option<(f64, usize)> = None;
-        for i in 0..n {
-            let m = &self.materials[self.p.typ[i]];
-            let t_r = crate::physics::timestep::rayleigh_time(
-                self.p.radius[i],
-                self.p.density[i],
-                m.youngs_modulus,
-                m.poisson_ratio,
-            );
-            if worst.is_none_or(|(t, _)| t_r < t) {
-                worst = Some((t_r, i));
-            }
-        }
-        if let Some((t_r, i)) = worst {
+        if let Some((t_r, i)) = self.rayleigh_worst() {
             if self.dt > t_r {
                 return Err(format!(
                     "step {}: particle {}: time step {:e} s is above the Rayleigh time {:e} s: the run would be unstable",
@@ -223,8 +211,35 @@ impl World {
         Ok(warnings)
     }
 
+    /// The smallest Rayleigh time of the particles and the particle that has it (LIGGGHTS checks
+    /// the same): above it the explicit scheme is unstable.
+    pub(super) fn rayleigh_worst(&self) -> Option<(f64, usize)> {
+        let mut worst: Option<(f64, usize)> = None;
+        for i in 0..self.p.len() {
+            let m = &self.materials[self.p.typ[i]];
+            let t_r = crate::physics::timestep::rayleigh_time(
+                self.p.radius[i],
+                self.p.density[i],
+                m.youngs_modulus,
+                m.poisson_ratio,
+            );
+            if worst.is_none_or(|(t, _)| t_r < t) {
+                worst = Some((t_r, i));
+            }
+        }
+        worst
+    }
+
     /// One velocity-Verlet step, stage by stage in the LAMMPS `Verlet` order.
     pub fn step(&mut self) -> Result<(), StepError> {
+        self.step_to_pre_force()?;
+        self.step_from_pre_force()
+    }
+
+    /// The first half of [`World::step`]: the step counter, first half kick and drift, boundary
+    /// motion and the neighbour check. What a deck changes "before the forces" (LAMMPS
+    /// `pre_force`, e.g. `fix adapt`) goes between this and [`World::step_from_pre_force`].
+    pub fn step_to_pre_force(&mut self) -> Result<(), StepError> {
         self.step += 1;
         // Threads pay only when the cores are free: the probe (`probe.rs`) times windows of whole
         // steps with and without them and keeps the faster. Whole steps, so that what threading
@@ -236,6 +251,13 @@ impl World {
         }
         self.move_boundaries();
         timer.leave_out(|| self.neighbor_check())?;
+        self.step_timer = Some(timer);
+        Ok(())
+    }
+
+    /// The second half of [`World::step`]: forces and the second half kick.
+    pub fn step_from_pre_force(&mut self) -> Result<(), StepError> {
+        let timer = self.step_timer.take().expect("step_to_pre_force runs first");
         self.compute_forces(true)?;
         if self.integrate {
             self.final_integrate()?;

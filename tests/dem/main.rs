@@ -6,6 +6,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod adapt;
 mod against_liggghts;
 mod conservation;
 mod deck;

@@ -1,5 +1,6 @@
 //! `fix` and `unfix`: one handler per fix style (the `match` in `fix`).
 
+mod adapt;
 mod ave_time;
 pub(super) mod check_timestep;
 pub(super) mod insert;
@@ -115,6 +116,7 @@ impl Deck {
             "insert/stream" => self.insert_stream(a)?,
             "check/timestep/gran" => self.check_timestep(a)?,
             "momentum" => self.momentum(a)?,
+            "adapt" => self.fix_adapt(a)?,
             other => return Err(unsupported(&format!("fix style {other}"))),
         };
         self.fixes.push((id.into(), kind));
@@ -153,6 +155,8 @@ impl Deck {
             FixKind::MeshSurface(_) => return Err(unsupported("unfix of a mesh/surface fix")),
             FixKind::Insert => self.stop_inserting(id),
             FixKind::CheckTimestep(k) => self.checks[k] = None,
+            // The radii keep their last values (LIGGGHTS restores nothing for `atom diameter`).
+            FixKind::Adapt { .. } => {}
         }
         Ok(())
     }
