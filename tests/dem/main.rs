@@ -7,6 +7,7 @@
 mod common;
 
 mod against_liggghts;
+mod cohesion_hysteresis;
 mod conservation;
 mod deck;
 mod insert;
