@@ -163,6 +163,15 @@ fn cohesion_and_hysteresis_bad_input_stops_with_file_and_line() {
             ),
             "in.test:21: unsupported a wall model different from the pair model",
         ),
+        (
+            // Restarts have no field for the largest overlap: a pair in the neighbour list stops it.
+            deck(
+                HYSTERESIS,
+                "model hooke/hysteresis tangential history",
+                "create_atoms 1 single 0.0021 0 0 units box\nset atom 2 diameter 0.002 density 1000\nrun 10\nwrite_restart r.restart\n",
+            ),
+            "in.test:24: write_restart: the contact history of model hooke/hysteresis",
+        ),
     ];
     for (text, want) in cases {
         let (ok, out) = run_deck(text, &[]);
