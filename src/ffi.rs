@@ -189,6 +189,8 @@ fn coeffs(c: &mcdem_pair_coeffs) -> Result<PairCoeffs, FfiError> {
         friction: c.friction,
         tangential: crate::physics::hertz::Tangential::History,
         normal: crate::physics::NormalLaw::Hertz,
+        cohesion: 0.0,
+        tangential_reduce: false,
         damping_ratio_t_n: c.damping_ratio_t_n,
     })
 }

@@ -190,6 +190,9 @@ struct Deck {
     log: Option<BufWriter<File>>,
     props: HashMap<String, (String, Vec<f64>)>,
     pair: Option<GranModel>,
+    /// The model of the `fix wall/gran` walls (all walls run one model; it may drop the pair
+    /// style's cohesion, or be `hooke` beside `hooke/hysteresis` pairs).
+    wall_model: Option<GranModel>,
     mc_gamma: Option<f64>,
     fixes: Vec<(String, FixKind)>,
     computes: HashMap<String, ComputeKind>,
@@ -287,6 +290,7 @@ impl Deck {
             log,
             props: HashMap::new(),
             pair: None,
+            wall_model: None,
             mc_gamma: None,
             fixes: Vec::new(),
             computes: HashMap::new(),

@@ -13,6 +13,8 @@ pub(super) enum NormalModel {
     Hooke,
     /// `model mc_advanced`: the advanced multi-contact law (Ghods et al. 2022, Eqs. 2–3).
     McAdvanced,
+    /// `model hooke/hysteresis`: LIGGGHTS' hysteretic hooke spring with adhesion.
+    HookeHysteresis,
 }
 
 impl std::str::FromStr for NormalModel {
@@ -22,7 +24,10 @@ impl std::str::FromStr for NormalModel {
             "hertz" => Ok(NormalModel::Hertz),
             "hooke" => Ok(NormalModel::Hooke),
             "mc_advanced" => Ok(NormalModel::McAdvanced),
-            other => Err(unsupported(&format!("granular model '{other}' (hertz, hooke or mc_advanced)"))),
+            "hooke/hysteresis" => Ok(NormalModel::HookeHysteresis),
+            other => Err(unsupported(&format!(
+                "granular model '{other}' (hertz, hooke, hooke/hysteresis or mc_advanced)"
+            ))),
         }
     }
 }
@@ -55,6 +60,10 @@ pub(super) struct GranModel {
     pub(super) limit_force: bool,
     /// `ktToKnUser on|off` (model hooke; off by default).
     pub(super) kt_to_kn: bool,
+    /// `cohesion sjkr` (`cohesion off`, the default: false).
+    pub(super) cohesion: bool,
+    /// `tangential_reduce on|off` (cohesion sjkr; off by default): the Coulomb limit sees the cohesion.
+    pub(super) tangential_reduce: bool,
 }
 
 /// An `on|off` value of a model option.
@@ -82,6 +91,7 @@ impl GranModel {
             ("tangential_damping", Some(x)) => self.tangential_damping = on_off(key, x)?,
             ("limitForce", Some(x)) => self.limit_force = on_off(key, x)?,
             ("ktToKnUser", Some(x)) => self.kt_to_kn = on_off(key, x)?,
+            ("tangential_reduce", Some(x)) => self.tangential_reduce = on_off(key, x)?,
             // LIGGGHTS' default; `viscous on` (hooke's Stokes-number restitution) is not modelled.
             ("viscous", Some("off")) => {}
             ("viscous", Some("on")) => {
@@ -97,7 +107,7 @@ impl GranModel {
         let advanced = match self.model {
             None => {
                 return Err(
-                    "pair_style gran: 'model hertz', 'model hooke' or 'model mc_advanced' is required".into(),
+                    "pair_style gran: 'model hertz', 'model hooke', 'model hooke/hysteresis' or 'model mc_advanced' is required".into(),
                 )
             }
             Some(m) => m == NormalModel::McAdvanced,
@@ -111,7 +121,29 @@ impl GranModel {
         if self.update_every.is_some() && !advanced {
             return Err("updateEvery is a setting of model mc_advanced".into());
         }
-        let hooke = self.model == Some(NormalModel::Hooke);
+        if self.tangential_reduce && !self.cohesion {
+            return Err("tangential_reduce is a setting of cohesion sjkr".into());
+        }
+        if self.cohesion && (advanced || self.surface_mc) {
+            return Err(unsupported("cohesion sjkr with a multi-contact model"));
+        }
+        let hysteresis = self.model == Some(NormalModel::HookeHysteresis);
+        if hysteresis {
+            // LIGGGHTS 3.8 registers these settings for hooke/hysteresis but its force never reads them.
+            for (on, what) in [(self.limit_force, "limitForce on"), (self.kt_to_kn, "ktToKnUser on")] {
+                if on {
+                    return Err(format!(
+                        "{what} has no effect in LIGGGHTS 3.8's model hooke/hysteresis (it is read by model hooke only): drop it"
+                    ));
+                }
+            }
+            if self.surface_mc {
+                return Err(
+                    "model hooke/hysteresis has no multi-contact form: drop 'surface multicontact'".into()
+                );
+            }
+        }
+        let hooke = self.model == Some(NormalModel::Hooke) || hysteresis;
         if !hooke {
             for (on, what) in [
                 (!self.tangential_damping, "tangential_damping off"),
@@ -142,9 +174,14 @@ impl GranModel {
         self.model == Some(NormalModel::McAdvanced)
     }
 
-    /// The model is `hooke`.
+    /// The model is `hooke` or `hooke/hysteresis` (which starts from hooke's stiffness and damping).
     pub(super) fn is_hooke(&self) -> bool {
-        self.model == Some(NormalModel::Hooke)
+        matches!(self.model, Some(NormalModel::Hooke | NormalModel::HookeHysteresis))
+    }
+
+    /// The model is `hooke/hysteresis`.
+    pub(super) fn is_hysteresis(&self) -> bool {
+        self.model == Some(NormalModel::HookeHysteresis)
     }
 
     /// The `model hooke` options compared between a wall and the pair style: (tangential_damping,
@@ -159,6 +196,7 @@ impl GranModel {
             Some(NormalModel::Hertz) => "hertz",
             Some(NormalModel::Hooke) => "hooke",
             Some(NormalModel::McAdvanced) => "mc_advanced",
+            Some(NormalModel::HookeHysteresis) => "hooke/hysteresis",
             None => "(none)",
         }
     }
@@ -200,6 +238,8 @@ impl Deck {
             tangential_damping: true,
             limit_force: false,
             kt_to_kn: false,
+            cohesion: false,
+            tangential_reduce: false,
         };
         let mut k = start;
         while k < a.len() {
@@ -207,7 +247,12 @@ impl Deck {
             match (a[k], v) {
                 ("model", Some(x)) => m.model = Some(x.parse()?),
                 ("tangential", Some(x)) => m.tangential = tangential_model(x)?,
-                ("cohesion", Some("off")) | ("rolling_friction", Some("off")) => {}
+                ("rolling_friction", Some("off")) => {}
+                ("cohesion", Some("off")) => m.cohesion = false,
+                ("cohesion", Some("sjkr")) => m.cohesion = true,
+                ("cohesion", Some(other)) => {
+                    return Err(unsupported(&format!("cohesion model '{other}' (sjkr or off)")))
+                }
                 ("surface", Some("default")) => m.surface_mc = false,
                 ("surface", Some("multicontact")) => m.surface_mc = true,
                 (key, v) => {
@@ -319,6 +364,43 @@ impl Deck {
         if pair.is_hooke() {
             self.world.use_hooke(self.characteristic_velocity()?, &rest, pair.hooke_options())?;
         }
+        // The walls run the pair law without what they leave out (see `fix wall/gran`): plain
+        // hooke beside hooke/hysteresis pairs, cohesion only where their own line asks for it.
+        let mut walls = self.world.coeffs.clone();
+        if pair.is_hysteresis() {
+            let need = |name: &str| {
+                if self.props.contains_key(name) {
+                    per_pair(self, name)
+                } else {
+                    Err(format!(
+                        "fix property/global {name} is missing (model hooke/hysteresis needs 'fix ID all property/global {name} peratomtypepair N ...')"
+                    ))
+                }
+            };
+            let (k2, kc, phi) = (
+                need("coefficientMaxElasticStiffness")?,
+                need("coefficientAdhesionStiffness")?,
+                need("coefficientPlasticityDepth")?,
+            );
+            self.world.use_hysteresis(&k2, &kc, &phi)?;
+        }
+        let wall_model = self.wall_model.clone();
+        if pair.cohesion || wall_model.as_ref().is_some_and(|w| w.cohesion) {
+            const NAME: &str = "cohesionEnergyDensity";
+            if !self.props.contains_key(NAME) {
+                return Err(format!(
+                    "fix property/global {NAME} is missing (cohesion sjkr needs 'fix ID all property/global {NAME} peratomtypepair N ...')"
+                ));
+            }
+            let ced = per_pair(self, NAME)?;
+            if pair.cohesion {
+                World::add_cohesion(&mut self.world.coeffs, nt, &ced, pair.tangential_reduce)?;
+            }
+            if let Some(w) = wall_model.as_ref().filter(|w| w.cohesion) {
+                World::add_cohesion(&mut walls, nt, &ced, w.tangential_reduce)?;
+            }
+        }
+        self.world.wall_coeffs = (walls != self.world.coeffs).then_some(walls);
         self.world.closure = Some(closure);
         self.world.liggghts_radii = pair.surface_mc || pair.stock_pair_radii;
         self.world.mc_range =

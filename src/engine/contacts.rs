@@ -15,6 +15,11 @@ pub(super) struct Contacts {
     /// Per pair, under the multi-contact closure: what its next pass reads (empty under Hertz).
     pub(super) pair_hist: Vec<PairHist>,
     pub(super) pair_hist_old: Vec<PairHist>,
+    /// Per pair, under a normal law with a history of its own (`hooke/hysteresis`): the largest
+    /// overlap δ_max of the contact (0 when apart). Empty under the other laws, so their passes
+    /// neither load nor store it.
+    pub(super) pair_dmax: Vec<f64>,
+    pub(super) pair_dmax_old: Vec<f64>,
     pub(super) wc: Vec<WallContact>,
     pub(super) wc_old: Vec<WallContact>,
     /// Per pair, under the multi-contact closure: this step's radius changes (a Hertz pass reads none).

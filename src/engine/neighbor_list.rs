@@ -146,6 +146,11 @@ impl World {
         self.contacts.pair_hist.clear();
         let keep_hist = self.closure == Some(Closure::MultiContact);
         let old_hist = self.contacts.pair_hist_old.len() == self.contacts.pairs_old.len();
+        // The normal law's history rides along the same way.
+        std::mem::swap(&mut self.contacts.pair_dmax, &mut self.contacts.pair_dmax_old);
+        self.contacts.pair_dmax.clear();
+        let keep_dmax = self.normal_history();
+        let old_dmax = self.contacts.pair_dmax_old.len() == self.contacts.pairs_old.len();
         let mut k = 0;
         for &(i, j) in &self.lists.cand {
             while k < self.contacts.pairs_old.len()
@@ -158,6 +163,10 @@ impl World {
             if keep_hist {
                 let h = old.filter(|_| old_hist).map(|_| self.contacts.pair_hist_old[k]);
                 self.contacts.pair_hist.push(h.unwrap_or(PairHist::NEW));
+            }
+            if keep_dmax {
+                let h = old.filter(|_| old_dmax).map(|_| self.contacts.pair_dmax_old[k]);
+                self.contacts.pair_dmax.push(h.unwrap_or(0.0));
             }
         }
         self.multi.slots_stale = true;
@@ -275,6 +284,16 @@ impl World {
                     std::mem::swap(&mut h.ri_prev, &mut h.rj_prev);
                 }
             }
+        }
+        if self.contacts.pair_dmax.len() == self.contacts.pairs.len() {
+            // The largest overlap is the same seen from either particle; it follows its pair.
+            let mut order: Vec<u32> = (0..self.contacts.pairs.len() as u32).collect();
+            order.sort_unstable_by_key(|&k| {
+                (self.contacts.pairs[k as usize].i, self.contacts.pairs[k as usize].j)
+            });
+            self.contacts.pair_dmax = order.iter().map(|&k| self.contacts.pair_dmax[k as usize]).collect();
+        } else {
+            self.contacts.pair_dmax.clear();
         }
         if self.contacts.pair_hist.len() == self.contacts.pairs.len() {
             // One permutation for both lists.

@@ -44,7 +44,8 @@ impl World {
 
     /// Elastic energy stored in the contacts, Σ (2/5) k_n δ² (Hertz potential, undamped part;
     /// ½ k_n δ² under `model hooke`). Used by the energy-conservation checks; exact without
-    /// multi-contact.
+    /// multi-contact. `hooke/hysteresis` and `cohesion sjkr` have no potential (they dissipate by
+    /// design): the loading branch ½ k_n δ² is counted and the cohesion is left out.
     pub fn elastic_energy(&self) -> f64 {
         let domain = match self.domain {
             Some(d) => d,
@@ -70,7 +71,7 @@ impl World {
             let delta = self.p.radius[i] - (self.p.x[i] - c.point).norm();
             if delta > 0.0 {
                 let wt = self.walls[c.wall as usize].geom.wall_type(&self.meshes, c.mesh);
-                let co = &self.coeffs[self.p.typ[i] * nt + wt];
+                let co = &self.wall_coeffs()[self.p.typ[i] * nt + wt];
                 e += stored_energy(co, self.p.radius[i], self.p.mass[i], delta);
             }
         }
@@ -123,9 +124,11 @@ impl World {
         let mc = self.closure == Some(Closure::MultiContact)
             && self.contacts.pair_hist.len() == np
             && self.contacts.pair_dr.len() == np;
+        let hist = self.normal_history() && self.contacts.pair_dmax.len() == np;
         let closure = mc.then_some((&self.contacts.pair_dr[..], &mut self.contacts.pair_hist[..]));
+        let dmax = hist.then_some(&mut self.contacts.pair_dmax[..]);
         let mut touching = Touching { x: &self.p.x, domain, out: Vec::new(), pair: Vec::new() };
-        ctx.pass(&mut self.contacts.pairs, closure, false, &mut touching).map_err(|e| *e)?;
+        ctx.pass(&mut self.contacts.pairs, closure, dmax, false, &mut touching).map_err(|e| *e)?;
         let mut out = touching.out;
         for (c, &k) in out.iter_mut().zip(&touching.pair) {
             c.shear = self.contacts.pairs[k].shear;
@@ -164,7 +167,7 @@ pub(super) fn add_outer(s: &mut [[f64; 3]; 3], u: &Vec3, w: &Vec3) {
 fn stored_energy(c: &crate::physics::PairCoeffs, reff: f64, meff: f64, delta: f64) -> f64 {
     match &c.normal {
         NormalLaw::Hertz => 0.4 * crate::physics::hertz::hertz_force(c.e_star, reff, delta) * delta,
-        NormalLaw::Hooke(h) => {
+        NormalLaw::Hooke(h) | NormalLaw::HookeHysteresis(h, _) => {
             0.5 * crate::physics::hooke::normal(c.e_star, h, delta, reff, meff, 0.0).elastic * delta
         }
     }

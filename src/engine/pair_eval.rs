@@ -1,7 +1,7 @@
 //! One pair's contact through [`crate::physics::pair`]: pair by pair or in vectorised batches,
 //! with or without the multi-contact closure's state (the [`PairState`] of a pass).
 
-use crate::physics::pair::{particle_particle, Body, ContactError, PairLanes, LANES};
+use crate::physics::pair::{particle_particle_with_history, Body, ContactError, PairLanes, LANES};
 use crate::physics::{PairCoeffs, Vec3};
 
 use super::contacts::{contact_error, Pair, PairDr, PairHist, RECEIVER_GAP};
@@ -78,7 +78,8 @@ impl PairCtx<'_> {
         }
         let c = &self.coeffs[p.typ[i] * self.nt + p.typ[j]];
         let mut shear = pr.shear;
-        let r = particle_particle(c, &bi, &bj, dri, dr[1], self.dt, &mut shear)
+        let mut delta_max = state.delta_max(k);
+        let r = particle_particle_with_history(c, &bi, &bj, dri, dr[1], self.dt, &mut shear, &mut delta_max)
             .map_err(|e| Box::new(contact_error(self.step, p.id[i], Some(p.id[j]), e)))?;
         let fnorm = match r {
             Some(cf) => {
@@ -98,6 +99,7 @@ impl PairCtx<'_> {
         if self.update {
             pr.shear = shear;
             state.keep(k, fnorm, ri_stored, rj);
+            state.keep_delta_max(k, delta_max);
         }
         Ok(())
     }
@@ -126,6 +128,7 @@ impl PairCtx<'_> {
             if self.update {
                 pr.shear = Vec3::zeros();
                 state.keep(k, 0.0, ri, rj);
+                state.keep_delta_max(k, 0.0);
             }
             return None;
         }
@@ -232,14 +235,20 @@ impl PairCtx<'_> {
 impl PairCtx<'_> {
     /// Evaluates `pairs` in order into `sink` (vectorised batches when `batched`), with their
     /// radius changes and closure state when the multi-contact closure is on (`closure`, one
-    /// entry per pair each).
+    /// entry per pair each), or with the normal law's history when it keeps one (`delta_max`, one
+    /// per pair; `hooke/hysteresis`, which has no multi-contact form and no batches).
     pub(super) fn pass(
         &self,
         pairs: &mut [Pair],
         closure: Option<(&[PairDr], &mut [PairHist])>,
+        delta_max: Option<&mut [f64]>,
         batched: bool,
         sink: &mut impl PairSink,
     ) -> Result<(), Box<StepError>> {
+        if let Some(dmax) = delta_max {
+            let n = pairs.len();
+            return self.pass_with(pairs, &mut NormalHistory { delta_max: &mut dmax[..n] }, false, sink);
+        }
         match closure {
             None => self.pass_with(pairs, &mut NoClosure, batched, sink),
             Some((dr, hist)) => {
@@ -279,6 +288,14 @@ pub(super) trait PairState {
     fn near(&mut self, k: usize, near: bool);
     /// What the next multi-contact pass reads of pair k: |F·n| and the modified radii.
     fn keep(&mut self, k: usize, fnorm: f64, ri: f64, rj: f64);
+    /// The normal law's history of pair k (largest overlap of `hooke/hysteresis`; 0 otherwise).
+    #[inline(always)]
+    fn delta_max(&self, _: usize) -> f64 {
+        0.0
+    }
+    /// Keeps the normal law's history of pair k (nothing to keep for the other laws).
+    #[inline(always)]
+    fn keep_delta_max(&mut self, _: usize, _: f64) {}
 }
 
 /// Hertz: no radius changes, nothing kept.
@@ -314,5 +331,30 @@ impl PairState for ClosureState<'_> {
     fn keep(&mut self, k: usize, fnorm: f64, ri: f64, rj: f64) {
         let h = &mut self.hist[k];
         (h.fn_prev, h.ri_prev, h.rj_prev) = (fnorm, ri, rj);
+    }
+}
+
+/// A normal law with a history of its own (`hooke/hysteresis`): no radius changes, the largest
+/// overlap of each pair in and out.
+pub(super) struct NormalHistory<'a> {
+    pub(super) delta_max: &'a mut [f64],
+}
+
+impl PairState for NormalHistory<'_> {
+    #[inline(always)]
+    fn dr(&self, _: usize) -> PairDr {
+        [0.0; 2]
+    }
+    #[inline(always)]
+    fn near(&mut self, _: usize, _: bool) {}
+    #[inline(always)]
+    fn keep(&mut self, _: usize, _: f64, _: f64, _: f64) {}
+    #[inline(always)]
+    fn delta_max(&self, k: usize) -> f64 {
+        self.delta_max[k]
+    }
+    #[inline(always)]
+    fn keep_delta_max(&mut self, k: usize, v: f64) {
+        self.delta_max[k] = v;
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::PairLanes;
-use crate::physics::{NormalLaw, Vec3};
+use crate::physics::{NormalLaw, PairCoeffs, Vec3};
 use crate::team::SplitMut;
 
 use super::blocks::{BALANCE_PASSES, MAX_PAIR_BLOCKS, MIN_BLOCK_PAIRS};
@@ -64,9 +64,18 @@ impl World {
     /// history` and the Hertz law with the radii of docs/spec.md §2; the LIGGGHTS `surface
     /// multicontact` radii, `no_history` and `model hooke` take the pair-by-pair path.
     pub(super) fn batched(&self) -> bool {
+        let plain = |c: &PairCoeffs| {
+            c.tangential == Tangential::History && c.normal == NormalLaw::Hertz && c.cohesion == 0.0
+        };
         !self.liggghts_radii
-            && self.coeffs.iter().all(|c| c.tangential == Tangential::History && c.normal == NormalLaw::Hertz)
+            && self.coeffs.iter().all(plain)
+            && self.wall_coeffs.as_ref().is_none_or(|w| w.iter().all(plain))
             && PairLanes::vectorised()
+    }
+
+    /// The pair law keeps a history value per contact (`hooke/hysteresis`).
+    pub(super) fn normal_history(&self) -> bool {
+        self.coeffs.iter().any(|c| c.normal.has_history())
     }
 
     /// Pair forces and torques into every particle's sums (from zero), each pair's force recorded
@@ -79,8 +88,18 @@ impl World {
         threads: usize,
         batched: bool,
     ) -> Result<(), StepError> {
-        let strategy = self.pair_strategy(threads);
+        // A normal law with a per-pair history runs on one thread: its history array is not
+        // split into the threads' shares (the decks that use it are small).
+        let hist = self.normal_history();
+        let strategy = if hist { PairStrategy::Serial } else { self.pair_strategy(threads) };
         let np = self.contacts.pairs.len();
+        if !hist {
+            self.contacts.pair_dmax.clear();
+        } else if self.contacts.pair_dmax.len() != np {
+            // A law that starts now finds every pair new.
+            self.contacts.pair_dmax.clear();
+            self.contacts.pair_dmax.resize(np, 0.0);
+        }
         if !mc {
             // Hertz keeps no closure state: a closure that starts later finds every pair new.
             self.contacts.pair_hist.clear();
@@ -99,6 +118,7 @@ impl World {
     /// [`PairStrategy::Serial`]. The threaded strategies add in this order too: identical sums.
     fn pairs_serial(&mut self, update: bool, mc: bool, batched: bool) -> Result<(), StepError> {
         let n = self.p.len();
+        let hist = self.normal_history();
         let ctx = PairCtx::new(
             &self.p,
             &self.coeffs,
@@ -118,7 +138,8 @@ impl World {
         torque.resize(n, Vec3::zeros());
         let mut sums = SumInto { f, torque, force: &mut self.contacts.pair_force };
         let closure = mc.then_some((&self.contacts.pair_dr[..], &mut self.contacts.pair_hist[..]));
-        ctx.pass(&mut self.contacts.pairs, closure, batched, &mut sums).map_err(|e| *e)?;
+        let dmax = hist.then_some(&mut self.contacts.pair_dmax[..]);
+        ctx.pass(&mut self.contacts.pairs, closure, dmax, batched, &mut sums).map_err(|e| *e)?;
         std::mem::swap(&mut self.p.f, &mut self.pair_scratch.f_buf);
         std::mem::swap(&mut self.p.torque, &mut self.pair_scratch.t_buf);
         Ok(())
@@ -184,7 +205,7 @@ impl World {
             // SAFETY: as the pairs.
             let closure = mc.then(|| (&drs[r.clone()], unsafe { hists.range(r) }));
             let mut sink = OwnedSums { sums, owner, block: b as u16, deferred, force };
-            let res = ctx.pass(prs, closure, batched, &mut sink);
+            let res = ctx.pass(prs, closure, None, batched, &mut sink);
             *ns += t0.elapsed().as_nanos() as u64;
             res
         })
@@ -235,7 +256,7 @@ impl World {
                     let closure = mc.then(|| (&drs[r.clone()], hists.range(r.clone())));
                     (pairs.range(r.clone()), outs.range(r.clone()), forces.range(r), closure)
                 };
-                ctx.pass(prs, closure, batched, &mut Keep { outs, force })
+                ctx.pass(prs, closure, None, batched, &mut Keep { outs, force })
             })
             .map_err(|e| *e)?;
         }

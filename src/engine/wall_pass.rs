@@ -316,7 +316,7 @@ impl World {
         let ctx = WallCtx {
             walls: &self.walls,
             meshes: &self.meshes,
-            coeffs: &self.coeffs,
+            coeffs: self.wall_coeffs.as_deref().unwrap_or(&self.coeffs),
             nt,
             typ: &self.p.typ,
             x: &self.p.x,

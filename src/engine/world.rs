@@ -5,7 +5,7 @@ use std::fmt;
 use crate::physics::contact_set::InfluenceCache;
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::ContactError;
-use crate::physics::{Material, PairCoeffs, Vec3};
+use crate::physics::{Hysteresis, Material, PairCoeffs, Vec3};
 use crate::team::Team;
 
 use super::blocks::{Blocks, PairThreads, StepTimer};
@@ -61,6 +61,10 @@ pub struct World {
     pub materials: Vec<Material>,
     /// ntypes × ntypes pair coefficients, row-major.
     pub coeffs: Vec<PairCoeffs>,
+    /// ntypes × ntypes particle–wall coefficients (row: particle type, column: wall type) when
+    /// the walls' model differs from the pairs' (LIGGGHTS lets `fix wall/gran` drop the pair
+    /// style's cohesion or run `hooke` beside `hooke/hysteresis` pairs); `None`: [`World::coeffs`].
+    pub wall_coeffs: Option<Vec<PairCoeffs>>,
     pub closure: Option<Closure>,
     pub dt: f64,
     pub step: u64,
@@ -345,6 +349,54 @@ impl World {
         }
         for (c, &e) in self.coeffs.iter_mut().zip(restitution) {
             *c = c.with_hooke(char_vel, e, options).map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    }
+
+    /// The particle–wall coefficient table (see [`World::wall_coeffs`]).
+    pub fn wall_coeffs(&self) -> &[PairCoeffs] {
+        self.wall_coeffs.as_deref().unwrap_or(&self.coeffs)
+    }
+
+    /// Switches every type pair of `model hooke` (after [`World::use_hooke`]) to LIGGGHTS'
+    /// `model hooke/hysteresis` with the per-type-pair tables `max_stiffness`
+    /// (coefficientMaxElasticStiffness), `adhesion` (coefficientAdhesionStiffness) and `depth`
+    /// (coefficientPlasticityDepth), each ntypes × ntypes.
+    pub fn use_hysteresis(
+        &mut self,
+        max_stiffness: &[f64],
+        adhesion: &[f64],
+        depth: &[f64],
+    ) -> Result<(), String> {
+        let n = self.coeffs.len();
+        if [max_stiffness.len(), adhesion.len(), depth.len()].iter().any(|&l| l != n) {
+            return Err(format!("peratomtypepair tables must have {0}×{0} entries", self.ntypes));
+        }
+        let nt = self.ntypes;
+        for (k, c) in self.coeffs.iter_mut().enumerate() {
+            let hy = Hysteresis::new(max_stiffness[k], adhesion[k], depth[k])
+                .and_then(|hy| c.with_hysteresis(hy))
+                .map_err(|e| format!("types {} and {}: {e}", k / nt + 1, k % nt + 1))?;
+            *c = hy;
+        }
+        Ok(())
+    }
+
+    /// Adds LIGGGHTS' `cohesion sjkr` with the ntypes × ntypes `cohesionEnergyDensity` table to
+    /// `table` (the pair or the wall coefficients); `tangential_reduce` as in [`PairCoeffs`].
+    pub fn add_cohesion(
+        table: &mut [PairCoeffs],
+        nt: usize,
+        energy_density: &[f64],
+        tangential_reduce: bool,
+    ) -> Result<(), String> {
+        if energy_density.len() != table.len() {
+            return Err(format!("peratomtypepair tables must have {nt}×{nt} entries"));
+        }
+        for (k, c) in table.iter_mut().enumerate() {
+            *c = c
+                .with_cohesion(energy_density[k], tangential_reduce)
+                .map_err(|e| format!("types {} and {}: {e}", k / nt + 1, k % nt + 1))?;
         }
         Ok(())
     }

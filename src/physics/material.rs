@@ -122,6 +122,45 @@ pub struct Hooke {
     pub kt_to_kn: bool,
 }
 
+/// The three per-type-pair ratios of LIGGGHTS' `model hooke/hysteresis` (the law is
+/// [`super::hooke_hysteresis::normal`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hysteresis {
+    /// `coefficientMaxElasticStiffness` k₂,max / k_n, > 1.
+    pub max_stiffness: f64,
+    /// `coefficientAdhesionStiffness` k_c / k_n, ≥ 0.
+    pub adhesion_stiffness: f64,
+    /// `coefficientPlasticityDepth` φ_f, ≥ 0 (δ_lim = k₂,max/(k₂,max − k_n) φ_f 2R*).
+    pub plasticity_depth: f64,
+}
+
+impl Hysteresis {
+    /// Validated ratios: k₂,max/k_n > 1 (LIGGGHTS divides by k₂,max − k_n), the others ≥ 0.
+    pub fn new(
+        max_stiffness: f64,
+        adhesion_stiffness: f64,
+        plasticity_depth: f64,
+    ) -> Result<Self, MaterialError> {
+        Ok(Self {
+            max_stiffness: check("coefficientMaxElasticStiffness", max_stiffness, "finite and > 1", |v| {
+                v > 1.0
+            })?,
+            adhesion_stiffness: check(
+                "coefficientAdhesionStiffness",
+                adhesion_stiffness,
+                "finite and >= 0",
+                |v| v >= 0.0,
+            )?,
+            plasticity_depth: check(
+                "coefficientPlasticityDepth",
+                plasticity_depth,
+                "finite and >= 0",
+                |v| v >= 0.0,
+            )?,
+        })
+    }
+}
+
 /// The normal contact law of a type pair.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum NormalLaw {
@@ -130,6 +169,16 @@ pub enum NormalLaw {
     Hertz,
     /// LIGGGHTS' linear spring-dashpot `model hooke` ([`super::hooke::normal`]).
     Hooke(Hooke),
+    /// LIGGGHTS' `model hooke/hysteresis` ([`super::hooke_hysteresis::normal`]): the hooke
+    /// stiffness and damping with a hysteretic loop; it keeps the largest overlap per contact.
+    HookeHysteresis(Hooke, Hysteresis),
+}
+
+impl NormalLaw {
+    /// The law keeps a history value per contact (the largest overlap of `hooke/hysteresis`).
+    pub fn has_history(&self) -> bool {
+        matches!(self, NormalLaw::HookeHysteresis(..))
+    }
 }
 
 /// Coefficients of one type pair, precomputed once (App. C, Eqs. C.3, C.4, C.8).
@@ -147,6 +196,11 @@ pub struct PairCoeffs {
     pub tangential: Tangential,
     /// Normal law (Hertz unless the deck asks for `model hooke`).
     pub normal: NormalLaw,
+    /// `cohesion sjkr`: the pair's `cohesionEnergyDensity` k_c [J/m³] ([`super::sjkr`]); 0 without
+    /// cohesion.
+    pub cohesion: f64,
+    /// `tangential_reduce on` (of `cohesion sjkr`): the Coulomb limit sees the cohesive force.
+    pub tangential_reduce: bool,
     /// γ_t / γ_n = √(S_t / S_n) = √(4 G* / E*): a property of the pair of materials, so the
     /// tangential damping costs a product per contact instead of a square root. Derived: build
     /// with [`PairCoeffs::new`] or [`PairCoeffs::from_moduli`].
@@ -179,6 +233,8 @@ impl PairCoeffs {
             friction,
             tangential,
             normal: NormalLaw::Hertz,
+            cohesion: 0.0,
+            tangential_reduce: false,
             damping_ratio_t_n: (4.0 * g_star / e_star).sqrt(),
         }
     }
@@ -197,5 +253,24 @@ impl PairCoeffs {
             check("coefficientRestitution", restitution, "finite and in (0, 1]", |v| v > 0.0 && v <= 1.0)?;
         let h = Hooke { char_vel: v, ln_e: e.ln(), tangential_damping, limit_force, kt_to_kn };
         Ok(Self { normal: NormalLaw::Hooke(h), ..self })
+    }
+
+    /// The same pair under `model hooke/hysteresis`: `model hooke` (see [`PairCoeffs::with_hooke`],
+    /// whose `limitForce` and `ktToKnUser` this law does not read) with the loop's ratios.
+    pub fn with_hysteresis(self, hy: Hysteresis) -> Result<Self, MaterialError> {
+        match self.normal {
+            NormalLaw::Hooke(h) => Ok(Self { normal: NormalLaw::HookeHysteresis(h, hy), ..self }),
+            _ => Err(MaterialError {
+                parameter: "normal law",
+                value: f64::NAN,
+                requirement: "model hooke before the hysteresis is added",
+            }),
+        }
+    }
+
+    /// The same pair with `cohesion sjkr` of energy density `energy_density` [J/m³] ≥ 0.
+    pub fn with_cohesion(self, energy_density: f64, tangential_reduce: bool) -> Result<Self, MaterialError> {
+        let k = check("cohesionEnergyDensity", energy_density, "finite and >= 0", |v| v >= 0.0)?;
+        Ok(Self { cohesion: k, tangential_reduce, ..self })
     }
 }

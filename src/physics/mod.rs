@@ -7,6 +7,8 @@
 //!   (Ghods et al. 2022, App. C; identical to LIGGGHTS `hertz tangential history`).
 //! - [`hooke`]: LIGGGHTS' linear `model hooke` (normal_model_hooke.h), with the same tangential
 //!   sub-models.
+//! - [`hooke_hysteresis`]: LIGGGHTS' `model hooke/hysteresis` (Walton–Braun loop with adhesion).
+//! - [`sjkr`]: LIGGGHTS' `cohesion sjkr` (simplified JKR cohesion).
 //! - [`brodu2015`]: the standard multi-contact displacement (Brodu et al. 2015; Ghods et al. Eq. 2).
 //! - [`ghods2022`]: the advanced multi-contact switch (Ghods et al. Eq. 3 and App. A).
 //! - [`contact_set`]: the per-particle kernel that applies Eq. 2 (and Eq. 3) to all contacts of one particle.
@@ -20,9 +22,11 @@ pub mod contact_set;
 pub mod ghods2022;
 pub mod hertz;
 pub mod hooke;
+pub mod hooke_hysteresis;
 pub mod lanes;
 pub mod material;
 pub mod pair;
+pub mod sjkr;
 pub mod timestep;
 
 /// Whether this CPU has AVX2. The compiler vectorises loops with square roots and divisions only
@@ -56,4 +60,4 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use contact_set::{ContactLoad, ContactSetKernel, McParams};
 pub use ghods2022::{Cap, MprTest};
-pub use material::{Hooke, Material, MaterialError, NormalLaw, PairCoeffs};
+pub use material::{Hooke, Hysteresis, Material, MaterialError, NormalLaw, PairCoeffs};

@@ -6,9 +6,9 @@
 use std::fmt;
 
 use super::hertz::{self, NormalForce, Tangential};
-use super::hooke;
 use super::material::{NormalLaw, PairCoeffs};
 use super::Vec3;
+use super::{hooke, hooke_hysteresis, sjkr};
 
 /// Kinematic state of one spherical body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +97,12 @@ struct Geometry {
     crj: f64,
     reff: f64,
     meff: f64,
+    /// Centre distance (centre to wall point for a wall) and the radii the overlap is measured
+    /// with (r_j = 0 for a wall): what the cohesion's contact area reads.
+    r: f64,
+    ri: f64,
+    rj: f64,
+    wall: bool,
 }
 
 // Always inlined: the caller then keeps only the fields it reads, instead of copying the whole
@@ -104,13 +110,31 @@ struct Geometry {
 // No early exit and no error: a loop over a batch of contacts ([`PairLanes`]) then vectorises;
 // the callers check the result ([`finite`]).
 #[inline(always)]
-fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3) -> ContactForce {
+// `delta_max`: the normal law's history (the largest overlap of `hooke/hysteresis`), unread by
+// the other laws.
+fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3, delta_max: &mut f64) -> ContactForce {
     let vn = g.vr.dot(&g.en);
-    let normal = match &c.normal {
+    let mut normal = match &c.normal {
         NormalLaw::Hertz => hertz::normal(c, g.overlap, g.reff, g.meff, vn),
         NormalLaw::Hooke(h) => hooke::normal(c.e_star, h, g.overlap, g.reff, g.meff, vn),
+        NormalLaw::HookeHysteresis(h, hy) => {
+            hooke_hysteresis::normal(c.e_star, (h, hy), g.overlap, g.reff, g.meff, vn, delta_max)
+        }
     };
     let mut force_i = g.en * normal.force;
+    if c.cohesion > 0.0 {
+        // `cohesion sjkr` after the normal law, as LIGGGHTS orders its sub-models.
+        let area = if g.wall {
+            sjkr::wall_contact_area(g.r, g.ri)
+        } else {
+            sjkr::pair_contact_area(g.r, g.ri, g.rj)
+        };
+        let f_coh = sjkr::force(c.cohesion, area);
+        force_i += g.en * f_coh;
+        if c.tangential_reduce {
+            normal.force += f_coh;
+        }
+    }
     let (mut torque_i, mut torque_j) = (Vec3::zeros(), Vec3::zeros());
     if c.friction > 0.0 {
         // Relative tangential velocity at the contact point, rotation included (docs/spec.md §1).
@@ -149,7 +173,7 @@ fn overlapping_pair(
     (dri, drj): (f64, f64),
     (mass_i, mass_j): (f64, f64),
     dt: f64,
-    shear: &mut Vec3,
+    (shear, delta_max): (&mut Vec3, &mut f64),
 ) -> ContactForce {
     let (ri, rj) = (radius_i + dri, radius_j + drj);
     let r = d.norm_squared().sqrt();
@@ -169,13 +193,18 @@ fn overlapping_pair(
         crj,
         reff,
         meff,
+        r,
+        ri,
+        rj,
+        wall: false,
     };
-    forces(c, &g, dt, shear)
+    forces(c, &g, dt, shear, delta_max)
 }
 
 /// Particle–particle contact. `dri`, `drj` are the multi-contact radius changes of i and j at this
 /// contact (0 for Hertz). Returns `Ok(None)` (and clears the tangential history) when the modified
-/// spheres do not overlap.
+/// spheres do not overlap. For normal laws without a history of their own (all but
+/// `hooke/hysteresis`, which needs [`particle_particle_with_history`]).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn particle_particle(
@@ -187,11 +216,30 @@ pub fn particle_particle(
     dt: f64,
     shear: &mut Vec3,
 ) -> Result<Option<ContactForce>, ContactError> {
+    particle_particle_with_history(c, bi, bj, dri, drj, dt, shear, &mut 0.0)
+}
+
+/// [`particle_particle`] with the normal law's history `delta_max` of the contact (the largest
+/// overlap of `hooke/hysteresis`; unread by the other laws), updated in place and reset to 0 when
+/// the spheres do not overlap.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn particle_particle_with_history(
+    c: &PairCoeffs,
+    bi: &Body,
+    bj: &Body,
+    dri: f64,
+    drj: f64,
+    dt: f64,
+    shear: &mut Vec3,
+    delta_max: &mut f64,
+) -> Result<Option<ContactForce>, ContactError> {
     let d = bi.x - bj.x;
     let radsum = (bi.radius + dri) + (bj.radius + drj);
     let rsq = d.norm_squared();
     if rsq >= radsum * radsum {
         *shear = Vec3::zeros();
+        *delta_max = 0.0;
         return Ok(None);
     }
     pair_error(d, radsum, bi.radius.min(bj.radius)).map_or(Ok(()), Err)?;
@@ -204,7 +252,7 @@ pub fn particle_particle(
         (dri, drj),
         (bi.mass, bj.mass),
         dt,
-        shear,
+        (shear, delta_max),
     );
     if !finite(&cf) {
         return Err(ContactError::NonFinite);
@@ -231,6 +279,10 @@ fn wall_geometry(d: Vec3, r: f64, ri: f64, point: Vec3, vr: Vec3, omega: Vec3, m
         // `hertz::effective_radius_and_mass`).
         reff: ri,
         meff: mass,
+        r,
+        ri,
+        rj: 0.0,
+        wall: true,
     }
 }
 
@@ -351,6 +403,8 @@ impl CoeffLanes {
             friction: self.friction[l],
             tangential: Tangential::History,
             normal: NormalLaw::Hertz,
+            cohesion: 0.0,
+            tangential_reduce: false,
             damping_ratio_t_n: self.damping_ratio_t_n[l],
         }
     }
@@ -447,7 +501,7 @@ impl Batch for PairLanes {
                 (self.dri[l], self.drj[l]),
                 (self.mass_i[l], self.mass_j[l]),
                 dt,
-                &mut shear,
+                (&mut shear, &mut 0.0),
             );
             let radsum = (ri + self.dri[l]) + (rj + self.drj[l]);
             self.ok[l] = pair_error(d, radsum, ri.min(rj)).is_none() && finite(&cf);
@@ -486,7 +540,9 @@ pub fn particle_wall(
     }
     overlap_error(ri - r, bi.radius).map_or(Ok(()), Err)?;
     let g = wall_geometry(d, r, ri, wall.point, bi.v - wall.velocity, bi.omega, bi.mass);
-    let cf = forces(c, &g, dt, shear);
+    // Walls run laws without a normal history (the decks' `fix wall/gran` refuses
+    // `hooke/hysteresis`).
+    let cf = forces(c, &g, dt, shear, &mut 0.0);
     if finite(&cf) {
         Ok(Some(cf))
     } else {
@@ -560,7 +616,7 @@ impl Batch for WallLanes {
                 self.mass[l],
             );
             let mut shear = lane3(&self.shear, l);
-            let cf = forces(&c, &g, dt, &mut shear);
+            let cf = forces(&c, &g, dt, &mut shear, &mut 0.0);
             self.ok[l] = r != 0.0 && g.overlap < self.radius[l] && finite(&cf);
             set_lane3(&mut self.force, l, &cf.force_i);
             set_lane3(&mut self.torque, l, &cf.torque_i);

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::process::Command;
 
-fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
+pub(crate) fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
     let dir = tempfile::tempdir().unwrap();
     let deck = dir.path().join("in.test");
     std::fs::write(&deck, text).unwrap();
@@ -20,7 +20,7 @@ fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
     (o.status.success(), all)
 }
 
-const BASE: &str = "units si
+pub(crate) const BASE: &str = "units si
 atom_style sphere
 boundary f f f
 region box block -0.01 0.01 -0.01 0.01 -0.01 0.01 units box
@@ -434,11 +434,11 @@ fn contact_model_keywords_name_the_bad_value() {
     for (to, says) in [
         (
             "pair_style gran tangential history",
-            "in.test:11: pair_style gran: 'model hertz', 'model hooke' or 'model mc_advanced' is required",
+            "in.test:11: pair_style gran: 'model hertz', 'model hooke', 'model hooke/hysteresis' or 'model mc_advanced' is required",
         ),
         (
-            "pair_style gran model hooke/hysteresis tangential history",
-            "in.test:11: unsupported granular model 'hooke/hysteresis' (hertz, hooke or mc_advanced)",
+            "pair_style gran model hooke/stiff tangential history",
+            "in.test:11: unsupported granular model 'hooke/stiff' (hertz, hooke, hooke/hysteresis or mc_advanced)",
         ),
         (
             // As in LIGGGHTS, the missing property is found when the run starts.

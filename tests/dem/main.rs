@@ -8,6 +8,7 @@ mod common;
 
 mod adapt;
 mod against_liggghts;
+mod cohesion_hysteresis;
 mod conservation;
 mod deck;
 mod groups_lattice;

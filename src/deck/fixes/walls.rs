@@ -144,11 +144,25 @@ impl Deck {
         // geometryTolerance and updateEvery but not give other values (they would be ignored);
         // pairRadii concerns pairs only.
         let Some(p) = &self.pair else { return Err("fix wall/gran before pair_style gran".into()) };
-        if (&p.model, &p.tangential, p.surface_mc, p.hooke_options())
-            != (&m.model, &m.tangential, m.surface_mc, m.hooke_options())
+        // Two differences are allowed, both as LIGGGHTS runs them: a wall may leave out the pair
+        // style's cohesion (or have its own), and may run `hooke` beside `hooke/hysteresis` pairs.
+        if m.is_hysteresis() {
+            return Err(unsupported(
+                "fix wall/gran model hooke/hysteresis (the walls keep no largest-overlap history; use model hooke for the walls)",
+            ));
+        }
+        let law = |g: &GranModel| if g.is_hysteresis() { "hooke" } else { g.name() };
+        if (law(p), &p.tangential, p.surface_mc, p.hooke_options())
+            != (law(&m), &m.tangential, m.surface_mc, m.hooke_options())
         {
             return Err(unsupported("a wall model different from the pair model"));
         }
+        if let Some(w) = &self.wall_model {
+            if (w.cohesion, w.tangential_reduce) != (m.cohesion, m.tangential_reduce) {
+                return Err(unsupported("walls with different cohesion settings"));
+            }
+        }
+        self.wall_model = Some(m.clone());
         let given = |key: &str| a.iter().rposition(|w| *w == key).and_then(|i| a.get(i + 1));
         let agrees = [
             ("mprTest", p.mpr_test == m.mpr_test),
