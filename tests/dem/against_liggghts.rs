@@ -10,7 +10,7 @@ use crate::common::{frames, present};
 
 const HYDROGEL: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
 
-fn have_liggghts() -> bool {
+pub(crate) fn have_liggghts() -> bool {
     // `liggghts -h` exits with status 1 after printing its help: only "could it start" matters.
     present(Command::new("liggghts").arg("-h").output().is_ok(), "the liggghts binary")
 }
@@ -20,12 +20,16 @@ fn have_hydrogel() -> bool {
     have_liggghts() && present(Path::new(HYDROGEL).exists(), HYDROGEL)
 }
 
-fn repo() -> PathBuf {
+pub(crate) fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// Runs a deck with both engines in two fresh directories (with `extra` copied in); returns them.
-fn run_both(deck: &Path, extra: &[&Path], vars: &[(&str, &str)]) -> (tempfile::TempDir, tempfile::TempDir) {
+pub(crate) fn run_both(
+    deck: &Path,
+    extra: &[&Path],
+    vars: &[(&str, &str)],
+) -> (tempfile::TempDir, tempfile::TempDir) {
     let ours = tempfile::tempdir().unwrap();
     let theirs = tempfile::tempdir().unwrap();
     for d in [&ours, &theirs] {
@@ -78,7 +82,7 @@ fn copy_dir(from: &Path, to: &Path) {
 /// (256 spheres over 30 steps: measured 6.6e-14, bound 1e-11; the die decks over their whole run:
 /// measured 5.6e-11, bound 1e-9). A lost contact or a wrong force term shows
 /// at 1e-4 or more.
-fn assert_dumps_agree(ours: &Path, theirs: &Path, tol: f64) {
+pub(crate) fn assert_dumps_agree(ours: &Path, theirs: &Path, tol: f64) {
     for (q, e) in frames::trajectory_difference(ours, theirs) {
         println!("{q:>8}: {e:.3e}");
         assert!(e <= tol, "{q}: relative difference {e:e} > {tol:e}");
