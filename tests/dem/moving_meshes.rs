@@ -5,8 +5,10 @@
 //! input.
 
 use std::path::Path;
+use std::process::Command;
 
 use crate::against_liggghts::{assert_dumps_agree, have_liggghts, repo, run_both};
+use crate::common::frames;
 
 /// Tolerance: a few-sphere run on a mesh differs from LIGGGHTS only by the order of the force
 /// sums and of the node arithmetic. Measured: belt and turntable below 5e-14 of each quantity's
@@ -79,5 +81,122 @@ fn stl_files_agree(ours: &Path, theirs: &Path) {
                 _ => assert_eq!(p, q, "{x} vs {y}"),
             }
         }
+    }
+}
+
+/// Runs mcdem on `deck` (a file of liggghts_inputs/) in a fresh directory with the meshes, after
+/// replacing the line starting with `line` by `by` (when given); returns (success, output, dir).
+fn run_ours(
+    deck: &str,
+    vars: &[(&str, &str)],
+    edit: Option<(&str, &str)>,
+) -> (bool, String, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("post")).unwrap();
+    std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
+    let meshes = repo().join("liggghts_inputs/meshes");
+    for e in std::fs::read_dir(&meshes).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.path().join("meshes").join(e.file_name())).unwrap();
+    }
+    let mut text = std::fs::read_to_string(repo().join("liggghts_inputs").join(deck)).unwrap();
+    if let Some((line, by)) = edit {
+        let start = text.find(line).unwrap_or_else(|| panic!("no line {line}"));
+        let end = start + text[start..].find('\n').unwrap();
+        text.replace_range(start..end, by);
+    }
+    let path = dir.path().join(deck);
+    std::fs::write(&path, text).unwrap();
+    let mut c = Command::new(env!("CARGO_BIN_EXE_mcdem"));
+    c.current_dir(dir.path()).arg("run").arg(&path).args(["-log", "none"]);
+    for (k, v) in vars {
+        c.arg("-var").arg(k).arg(v);
+    }
+    let o = c.output().unwrap();
+    let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    (o.status.success(), all, dir)
+}
+
+/// A solid sphere set down at rest on a belt moving at u (friction μ): while it slips, friction
+/// μ m g accelerates its centre (v = μ g t) and spins it backwards (I = 2/5 m R², so
+/// dω/dt = 5 μ g / (2 R)); the contact point's slip u − v − R|ω| closes at 7/2 μ g, so slipping
+/// ends at t* = 2 u / (7 μ g) and the sphere then rolls without slip at v = 2/7 u (the no-slip
+/// condition with the angular momentum about the contact point conserved from then on).
+/// Here u = 0.05 m/s, μ = 0.4: t* = 3.64 ms (1820 steps), v = 0.01429 m/s. Tolerances: the
+/// sphere is set down just touching, so its normal force builds up over the first ~200 steps
+/// and rings a little (the friction lags the ideal μ m g at first), and the elastic tangential
+/// spring lets the contact creep around t*: bounds 5 % on t* and 1 % on the final speed
+/// (measured: slipping ends at 3.626 ms, 0.4 % early; final speed 0.07 % above 2/7 u).
+#[test]
+fn a_sphere_on_a_belt_reaches_two_sevenths_of_its_speed_when_friction_says() {
+    let (ok, out, dir) = run_ours("conveyor_belt.in", &[("steps", "6000")], None);
+    assert!(ok, "{out}");
+    let d = frames::dump(&dir.path().join("post/belt.dump"));
+    let (id, step) = (frames::values(&d, "id"), frames::values(&d, "step"));
+    let (vx, wy) = (frames::values(&d, "vx"), frames::values(&d, "omegay"));
+    let (u, mu, g, r, dt) = (0.05, 0.4, 9.81, 0.001, 2e-6);
+    let rows: Vec<usize> = (0..id.len()).filter(|&k| id[k] == 1.0).collect();
+    // Slip of the contact point against the belt: the bottom point moves at v + ω × (−R ẑ),
+    // whose x part is v − R ω_y (friction along +x spins the sphere to ω_y < 0).
+    let slip = |k: usize| u - (vx[k] - r * wy[k]);
+    let t_star = 2.0 * u / (7.0 * mu * g);
+    let end = rows.iter().find(|&&k| slip(k) < 0.01 * u).map(|&k| step[k] * dt).expect("never rolls");
+    println!("slipping ends at {end:e} s, predicted {t_star:e} s");
+    assert!((end - t_star).abs() < 0.05 * t_star, "slipping ends at {end} s, predicted {t_star} s");
+    let at = |s: f64| rows.iter().copied().find(|&k| step[k] == s).unwrap();
+    let v_end = 2.0 / 7.0 * u;
+    let last = at(6000.0);
+    println!("v = {:e}, 2/7 u = {v_end:e}", vx[last]);
+    assert!((vx[last] - v_end).abs() < 0.01 * v_end, "v = {} vs 2/7 u = {v_end}", vx[last]);
+}
+
+/// Bad `move/mesh` and `surface_vel` input stops with the deck's file and line and the problem.
+#[test]
+fn bad_moving_mesh_input_is_named() {
+    let cases = [
+        ("if \"${form} == 1\"", "fix mv all move/mesh mesh plate spin 1 2 3", "unsupported fix move/mesh form spin"),
+        (
+            "if \"${form} == 1\"",
+            "fix mv all move/mesh mesh plate rotate origin 0 0 0 axis 0 0 0 period 1",
+            "fix move/mesh rotate: the axis must not be zero",
+        ),
+        (
+            "if \"${form} == 1\"",
+            "fix mv all move/mesh mesh plate rotate origin 0 0 0 axis 0 0 1 period 0",
+            "fix move/mesh rotate: period must be > 0, got 0",
+        ),
+        (
+            "if \"${form} == 1\"",
+            "fix mv all move/mesh mesh plate rotate origin 0 0 0 axes 0 0 1 period 1",
+            "fix move/mesh rotate: expected 'axis' at \"axes\"",
+        ),
+        (
+            "if \"${form} == 1\"",
+            "fix mv all move/mesh mesh plate riggle origin 0 0 0 axis 0 0 1 period 1",
+            "fix move/mesh riggle: expected",
+        ),
+        (
+            "fix\t\tplate all mesh/surface",
+            "fix plate all mesh/surface file meshes/plate_10mm.stl type 2 surface_ang_vel origin 0 0 0 axis 0 0 1 omega 1",
+            "unsupported fix mesh/surface keyword surface_ang_vel",
+        ),
+        (
+            "fix\t\tplate all mesh/surface",
+            "fix plate all mesh/surface file meshes/plate_10mm.stl type 2 surface_vel 1 0",
+            "mesh surface_vel: 3 values",
+        ),
+        (
+            "fix\t\tplate all mesh/surface",
+            "fix plate all mesh/surface file meshes/plate_10mm.stl type 2 surface_vel 1 0 0",
+            "fix move/mesh: mesh plate has a surface_vel; LIGGGHTS refuses to move such a mesh",
+        ),
+    ];
+    for (line, by, want) in cases {
+        let (ok, out, _dir) = run_ours("moving_plate.in", &[], Some((line, by)));
+        assert!(!ok, "{by}: ran");
+        assert!(
+            out.contains("ERROR: ") && out.contains("moving_plate.in:") && out.contains(want),
+            "{by}: {out}"
+        );
     }
 }
