@@ -356,8 +356,13 @@ impl Mesh {
         self.mover.is_some() || !self.surface_vel.is_empty()
     }
 
-    /// Largest node speed (what `fix check/timestep/gran` reads of a moving mesh).
+    /// Largest node speed of a mesh under a `fix move/mesh`, 0 for others: what `fix
+    /// check/timestep/gran` reads (LIGGGHTS 3.8 `fix_check_timestep_gran.cpp` counts only meshes
+    /// that move, not a conveyor's `surface_vel`).
     pub fn max_node_speed(&self) -> f64 {
+        if self.mover.is_none() {
+            return 0.0;
+        }
         let mut vmax: f64 = 0.0;
         for (t, tri) in self.tris.iter().enumerate() {
             for v in &tri.v {
