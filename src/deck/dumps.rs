@@ -110,13 +110,9 @@ impl Deck {
         }
         let vtk_due = |d: &vtk::VtkDump| step % d.every == 0 && d.last != Some(step);
         if self.vtk_dumps.iter().any(vtk_due) {
-            // Meshes under a `fix move/mesh` carry a velocity LIGGGHTS writes; others have none.
-            let mut moving = vec![false; self.world.meshes.len()];
-            for (_, k) in &self.fixes {
-                if let FixKind::MoveMesh(m) = k {
-                    moving[*m] = true;
-                }
-            }
+            // Meshes under a `fix move/mesh` or with a surface_vel carry a velocity LIGGGHTS
+            // writes; others have none.
+            let moving: Vec<bool> = self.world.meshes.iter().map(|m| m.has_velocity()).collect();
             for d in self.vtk_dumps.iter_mut().filter(|d| vtk_due(d)) {
                 d.write(&self.world, &moving)?;
             }

@@ -333,8 +333,10 @@ fn mesh(m: &MeshVtk, w: &World, moving: &[bool]) -> String {
     for &k in &m.meshes {
         let me = &w.meshes[k];
         let forces = if me.stress { w.mesh_face_forces(k) } else { vec![Vec3::zeros(); me.tris.len()] };
-        let v = if moving[k] { me.velocity } else { Vec3::zeros() };
         for (t, tri) in me.tris.iter().enumerate() {
+            // The face's velocity at its centre (the mean of its node velocities).
+            let centre = (tri.v[0] + tri.v[1] + tri.v[2]) / 3.0;
+            let v = if moving[k] { me.velocity_at(t, &centre) } else { Vec3::zeros() };
             pts.extend_from_slice(&tri.v);
             let n = (tri.v[1] - tri.v[0]).cross(&(tri.v[2] - tri.v[0]));
             let area = 0.5 * n.norm();

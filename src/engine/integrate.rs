@@ -10,7 +10,7 @@ use super::{StepError, World};
 
 impl World {
     /// The boundaries' part of the drift: the Lees–Edwards offset and the meshes of `fix
-    /// move/mesh` advance by one step, and the neighbour and wall-candidate checks learn how far.
+    /// move/mesh` advance by one step (`mesh_motion`), and the neighbour and wall-candidate checks learn how far.
     pub(super) fn move_boundaries(&mut self) {
         let dt = self.dt;
         if let Some(d) = self.domain.as_mut() {
@@ -19,11 +19,7 @@ impl World {
         }
         let mut travel: f64 = 0.0;
         for m in &mut self.meshes {
-            if m.velocity != Vec3::zeros() {
-                let d = m.velocity * dt;
-                m.translate(&d);
-                travel = travel.max(d.norm());
-            }
+            travel = travel.max(m.advance_motion(dt));
         }
         self.wall_search.wall_travel += travel;
     }

@@ -56,14 +56,23 @@ pub struct Triangle {
     coplanar: Span,
 }
 
-/// A rigid mesh wall: geometry, translational velocity (set by `fix move/mesh … linear`) and the
-/// total force the particles exert on it in the current step (`fix mesh/surface/stress`).
+/// A rigid mesh wall: geometry, its velocity field (rigid motion of `fix move/mesh`, conveyor
+/// surface velocity of `fix mesh/surface … surface_vel`) and the total force the particles exert
+/// on it in the current step (`fix mesh/surface/stress`).
 #[derive(Debug, Clone)]
 pub struct Mesh {
     pub name: String,
     pub wall_type: usize,
     pub tris: Vec<Triangle>,
+    /// Translational velocity of the rigid motion in the current step.
     pub velocity: Vec3,
+    /// Angular velocity of the rigid motion in the current step, about an axis through `origin`.
+    pub omega: Vec3,
+    pub origin: Vec3,
+    /// Per triangle: the conveyor velocity of `surface_vel` (empty when the mesh has none).
+    pub surface_vel: Vec<Vec3>,
+    /// The `fix move/mesh` driving the mesh, if any.
+    pub mover: Option<super::mesh_motion::Mover>,
     /// Force on the mesh [N] (minus the sum of its contact forces on the particles).
     pub force: Vec3,
     /// Torque-free bookkeeping only: the stress fix reports force components 1..3.
@@ -74,6 +83,15 @@ pub struct Mesh {
     edge_dirs: Vec<Vec3>,
     corner_dirs: Vec<Vec3>,
     coplanar: Vec<u32>,
+}
+
+/// A mesh's node positions and contact directions at one time (the reference of a turning
+/// motion).
+#[derive(Debug, Clone)]
+pub struct Pose {
+    tris: Vec<[Vec3; 3]>,
+    edge_dirs: Vec<Vec3>,
+    corner_dirs: Vec<Vec3>,
 }
 
 /// Where on its triangle a contact point lies; a contact found by several triangles keeps the
@@ -252,6 +270,10 @@ impl Mesh {
             wall_type,
             tris,
             velocity: Vec3::zeros(),
+            omega: Vec3::zeros(),
+            origin: Vec3::zeros(),
+            surface_vel: Vec::new(),
+            mover: None,
             force: Vec3::zeros(),
             stress: false,
             bb_lo: Vec3::zeros(),
@@ -316,7 +338,95 @@ impl Mesh {
         self.bb_hi = hi;
     }
 
-    /// Rigid translation of every node (LIGGGHTS moves nodes incrementally by v dt each step).
+    /// The wall's velocity at point `q` of triangle `t`: the rigid motion's v + ω × (q − origin)
+    /// plus the triangle's conveyor velocity. LIGGGHTS (`fix_wall_gran.cpp`, post_force_mesh)
+    /// interpolates the node velocities with the contact point's barycentric coordinates; the
+    /// rigid field is linear in position, so that interpolation is this same value.
+    #[inline]
+    pub fn velocity_at(&self, t: usize, q: &Vec3) -> Vec3 {
+        let mut v = self.velocity + self.omega.cross(&(q - self.origin));
+        if let Some(s) = self.surface_vel.get(t) {
+            v += s;
+        }
+        v
+    }
+
+    /// Does the mesh carry a velocity field (LIGGGHTS: has the element property `v`)?
+    pub fn has_velocity(&self) -> bool {
+        self.mover.is_some() || !self.surface_vel.is_empty()
+    }
+
+    /// Largest node speed of a mesh under a `fix move/mesh`, 0 for others: what `fix
+    /// check/timestep/gran` reads (LIGGGHTS 3.8 `fix_check_timestep_gran.cpp` counts only meshes
+    /// that move, not a conveyor's `surface_vel`).
+    pub fn max_node_speed(&self) -> f64 {
+        if self.mover.is_none() {
+            return 0.0;
+        }
+        let mut vmax: f64 = 0.0;
+        for (t, tri) in self.tris.iter().enumerate() {
+            for v in &tri.v {
+                vmax = vmax.max(self.velocity_at(t, v).norm());
+            }
+        }
+        vmax
+    }
+
+    /// Sets the conveyor velocity `surface_vel` (LIGGGHTS `FixMeshSurface::setVel`): on each
+    /// triangle the given velocity projected into the triangle's plane and scaled back to the
+    /// given speed, so that a belt moves at that speed whatever its slope (a triangle
+    /// perpendicular to the velocity gets none).
+    pub fn set_surface_velocity(&mut self, vs: &Vec3) {
+        let speed = vs.norm();
+        self.surface_vel = self
+            .tris
+            .iter()
+            .map(|tri| {
+                let n = (tri.v[1] - tri.v[0]).cross(&(tri.v[2] - tri.v[0])).normalize();
+                let tangential = vs - n * vs.dot(&n);
+                let l = tangential.norm();
+                if l > 0.0 {
+                    tangential * (speed / l)
+                } else {
+                    tangential
+                }
+            })
+            .collect();
+    }
+
+    /// The node positions and contact directions, as the reference a turning motion starts from.
+    pub(super) fn pose(&self) -> Pose {
+        Pose {
+            tris: self.tris.iter().map(|t| t.v).collect(),
+            edge_dirs: self.edge_dirs.clone(),
+            corner_dirs: self.corner_dirs.clone(),
+        }
+    }
+
+    /// Places the mesh at `reference` turned by `angle` [rad] about the unit `axis` through
+    /// `origin`: every node by the unit quaternion q = (cos(φ/2), sin(φ/2) axis) as
+    /// q (0, x − p) q* + p, the rotation of LIGGGHTS' `MultiNodeMesh::rotate`. Returns the largest
+    /// distance a node moved.
+    pub(super) fn place_turned(&mut self, reference: &Pose, axis: &Vec3, angle: f64, origin: &Vec3) -> f64 {
+        let (c, s) = ((0.5 * angle).cos(), (0.5 * angle).sin());
+        let q = [c, axis.x * s, axis.y * s, axis.z * s];
+        let mut travel: f64 = 0.0;
+        for (t, r) in self.tris.iter_mut().zip(&reference.tris) {
+            for (v, r) in t.v.iter_mut().zip(r) {
+                let new = quat_rotate(&q, &(r - origin)) + origin;
+                travel = travel.max((new - *v).norm());
+                *v = new;
+            }
+        }
+        let dirs = self.edge_dirs.iter_mut().chain(self.corner_dirs.iter_mut());
+        for (u, r) in dirs.zip(reference.edge_dirs.iter().chain(&reference.corner_dirs)) {
+            *u = quat_rotate(&q, r);
+        }
+        self.update_bbox();
+        travel
+    }
+
+    /// Rigid translation of every node (the `move` keyword of `fix mesh/surface`).
     pub fn translate(&mut self, d: &Vec3) {
         for t in &mut self.tris {
             for v in &mut t.v {
@@ -371,6 +481,24 @@ impl Mesh {
     pub fn far(&self, x: &Vec3, reach: f64) -> bool {
         (0..3).any(|a| x[a] < self.bb_lo[a] - reach || x[a] > self.bb_hi[a] + reach)
     }
+}
+
+/// Hamilton product of two quaternions (w, x, y, z).
+#[inline]
+fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + b[0] * a[1] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] + b[0] * a[2] + a[3] * b[1] - a[1] * b[3],
+        a[0] * b[3] + b[0] * a[3] + a[1] * b[2] - a[2] * b[1],
+    ]
+}
+
+/// The vector `v` rotated by the unit quaternion `q`: q (0, v) q*.
+#[inline]
+fn quat_rotate(q: &[f64; 4], v: &Vec3) -> Vec3 {
+    let r = quat_mul(&quat_mul(q, &[0.0, v.x, v.y, v.z]), &[q[0], -q[1], -q[2], -q[3]]);
+    Vec3::new(r[1], r[2], r[3])
 }
 
 /// Squared distance from `p` to triangle `t` (whether or not its closest point is a contact).

@@ -84,7 +84,7 @@ pub(super) fn collect(
                     group = Group { prefix, start: out.len(), reordered: false };
                     scratch.clear();
                 }
-                let mut fresh = WallContact::fresh(i, w, mi, t, q, m.velocity);
+                let mut fresh = WallContact::fresh(i, w, mi, t, q, m.velocity_at(t, &q));
                 let had = take_history(&mut fresh, old, &mut k);
                 let dist = dist2.sqrt();
                 let found = &mut out[group.start..];
@@ -103,12 +103,12 @@ pub(super) fn collect(
                         let best = kept_feature.min(feature);
                         if had && !kept_had {
                             if kept_feature < feature {
-                                fresh.point = found[j].point;
+                                (fresh.point, fresh.velocity) = (found[j].point, found[j].velocity);
                             }
                             found[j] = fresh;
                             group.reordered = true;
                         } else if feature < kept_feature {
-                            found[j].point = q;
+                            (found[j].point, found[j].velocity) = (q, fresh.velocity);
                         }
                         scratch[j] = (best, had || kept_had);
                     }

@@ -461,7 +461,10 @@ mod tests {
         let (mut travel_builds, mut onsets, mut before) = (0, 0, 0);
         for s in 0..240 {
             // Down and up by 8e-4 m at 2 m/s: 2e-5 m per step.
-            w.meshes[0].velocity = Vec3::new(0.0, 0.0, if (s / 40) % 2 == 0 { -2.0 } else { 2.0 });
+            if s % 40 == 0 {
+                let v = Vec3::new(0.0, 0.0, if (s / 40) % 2 == 0 { -2.0 } else { 2.0 });
+                w.meshes[0].mover = Some(crate::engine::Mover::new(crate::engine::Motion::Linear { v }));
+            }
             let travel = w.wall_search.wall_travel;
             w.step().unwrap();
             travel_builds += usize::from(w.wall_search.wall_travel < travel);

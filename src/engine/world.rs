@@ -207,10 +207,11 @@ impl World {
         if self.pair_threads != PairThreads::Serial {
             self.start_team();
         }
-        let vel: Vec<Vec3> = self.meshes.iter().map(|m| m.velocity).collect();
-        self.meshes.iter_mut().for_each(|m| m.velocity = Vec3::zeros());
+        // The conveyor velocity of `surface_vel` is set once and stays.
+        let vel: Vec<(Vec3, Vec3)> = self.meshes.iter().map(|m| (m.velocity, m.omega)).collect();
+        self.meshes.iter_mut().for_each(|m| (m.velocity, m.omega) = (Vec3::zeros(), Vec3::zeros()));
         let r = self.compute_forces(false).map_err(|e| e.to_string());
-        self.meshes.iter_mut().zip(vel).for_each(|(m, v)| m.velocity = v);
+        self.meshes.iter_mut().zip(vel).for_each(|(m, v)| (m.velocity, m.omega) = v);
         r?;
         Ok(warnings)
     }

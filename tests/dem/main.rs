@@ -1,4 +1,4 @@
-//! The standalone DEM (`mcdem run`): conservation, decks, insertion, walls, the multi-contact laws through the engine, threads, sorting, shear, and step-by-step agreement with LIGGGHTS.
+//! The standalone DEM (`mcdem run`): conservation, decks, insertion, walls (fixed, moving and conveyor meshes), the multi-contact laws through the engine, threads, sorting, shear, and step-by-step agreement with LIGGGHTS.
 //!
 //! One test binary per area (each module below was a binary of its own).
 
@@ -16,6 +16,7 @@ mod insert;
 mod mc_advanced;
 mod mc_approximations;
 mod mesh_walls;
+mod moving_meshes;
 mod mpr_test;
 mod portable;
 mod restart;

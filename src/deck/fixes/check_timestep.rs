@@ -90,7 +90,7 @@ impl Deck {
             w.walls.iter().rev().map(|f| &f.geom).find(|g| matches!(g, WallGeom::Meshes(_)))
         {
             for &m in ms {
-                vmax_mesh = vmax_mesh.max(w.meshes[m].velocity.norm());
+                vmax_mesh = vmax_mesh.max(w.meshes[m].max_node_speed());
             }
         }
         let vmax = (2.0 * vmax).max(vmax + vmax_mesh);

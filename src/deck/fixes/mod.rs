@@ -5,6 +5,7 @@ mod ave_time;
 pub(super) mod check_timestep;
 pub(super) mod insert;
 pub(super) mod momentum;
+mod move_mesh;
 mod reset_timestep;
 pub(super) mod stream;
 mod walls;
@@ -96,17 +97,7 @@ impl Deck {
             }
             "wall/gran" => self.wall_gran(a)?,
             "mesh/surface" | "mesh/surface/stress" => self.mesh_surface(a)?,
-            "move/mesh" => {
-                if a.len() != 10 || a[4] != "mesh" || a[6] != "linear" {
-                    return Err(unsupported("fix move/mesh form (only 'mesh ID linear vx vy vz')"));
-                }
-                let m = self.mesh_index(a[5])?;
-                if self.fixes.iter().any(|(_, k)| matches!(k, FixKind::MoveMesh(x) if *x == m)) {
-                    return Err(unsupported("two move/mesh fixes on one mesh"));
-                }
-                self.world.meshes[m].velocity = Vec3::new(num(a[7])?, num(a[8])?, num(a[9])?);
-                FixKind::MoveMesh(m)
-            }
+            "move/mesh" => self.move_mesh(a)?,
             "ave/time" => self.ave_time(a)?,
             "particletemplate/sphere" => self.particle_template(a)?,
             "particledistribution/discrete"
@@ -136,7 +127,7 @@ impl Deck {
                 self.world.integrate_group = None;
             }
             FixKind::Momentum => self.momenta.retain(|m| m.fix != id),
-            FixKind::MoveMesh(m) => self.world.meshes[m].velocity = Vec3::zeros(),
+            FixKind::MoveMesh(m) => self.world.meshes[m].stop_motion(),
             // An inactive wall keeps its slot so wall-contact keys stay valid.
             FixKind::Wall(w) => self.world.walls[w].geom = WallGeom::Meshes(Vec::new()),
             FixKind::AveTime(k) => {

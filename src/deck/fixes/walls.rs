@@ -46,6 +46,13 @@ impl Deck {
                     ops.push(("scale", vec![num(a.get(k + 1).ok_or("mesh scale: value")?)?]));
                     k += 2;
                 }
+                "surface_vel" => {
+                    let v = (1..=3)
+                        .map(|d| num(a.get(k + d).ok_or("mesh surface_vel: 3 values")?))
+                        .collect::<R<_>>()?;
+                    ops.push(("surface_vel", v));
+                    k += 4;
+                }
                 "stress" if matches!(a.get(k + 1), Some(&"on") | Some(&"off")) => k += 2,
                 "verbose" | "heal" if a.get(k + 1).is_some() => k += 2,
                 other => return Err(unsupported(&format!("fix {} keyword {other}", a[3]))),
@@ -58,12 +65,18 @@ impl Deck {
         }
         let raw = crate::engine::mesh::read_stl(&self.input_path(&file))?;
         let mut m = Mesh::new(a[1], t - 1, raw)?;
+        let mut surface_vel = None;
         for (op, v) in ops {
             match op {
                 "move" => m.translate(&Vec3::new(v[0], v[1], v[2])),
                 "rotate" => m.rotate(&Vec3::new(v[0], v[1], v[2]), v[3])?,
+                "surface_vel" => surface_vel = Some(Vec3::new(v[0], v[1], v[2])),
                 _ => m.scale(v[0]),
             }
+        }
+        // LIGGGHTS sets the conveyor velocity after the mesh is placed (post_create).
+        if let Some(vs) = surface_vel {
+            m.set_surface_velocity(&vs);
         }
         m.stress = a[3] == "mesh/surface/stress";
         self.world.meshes.push(m);
