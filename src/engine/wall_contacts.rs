@@ -73,6 +73,9 @@ pub(super) fn collect(
             WallGeom::Meshes(_) => {
                 let (mi, t) = (c.mesh as usize, c.tri as usize);
                 let m = &s.meshes[mi];
+                if m.surely_beyond(t, &x, reach) {
+                    continue;
+                }
                 let Some((q, feature)) = m.contact(t, &x) else { continue };
                 let dist2 = (x - q).norm_squared();
                 if dist2 >= reach * reach {
