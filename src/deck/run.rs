@@ -55,14 +55,33 @@ impl Deck {
         let (lo0, hi0) = *self.box0.get_or_insert((d.lo, d.hi));
         let (mut lo, mut hi) = (d.lo, d.hi);
         for a in (0..3).filter(|&a| self.shrink[a]) {
-            let (mut cmin, mut cmax) = (f64::INFINITY, f64::NEG_INFINITY);
-            for i in 0..p.len() {
-                let m = p.radius[i] + skin;
-                d.lo[a] = d.lo[a].min(p.x[i][a] - m);
-                d.hi[a] = d.hi[a].max(p.x[i][a] + m);
-                cmin = cmin.min(p.x[i][a]);
-                cmax = cmax.max(p.x[i][a]);
+            // Four independent running minima and maxima per quantity, merged at the end: the
+            // same values (min and max do not depend on the order), without one long chain of
+            // dependent compares through every particle at every step.
+            const L: usize = 4;
+            let (mut cmin, mut cmax) = ([f64::INFINITY; L], [f64::NEG_INFINITY; L]);
+            let (mut dlo, mut dhi) = ([d.lo[a]; L], [d.hi[a]; L]);
+            let mut take = |l: usize, x: &Vec3, r: f64| {
+                let (xa, m) = (x[a], r + skin);
+                dlo[l] = dlo[l].min(xa - m);
+                dhi[l] = dhi[l].max(xa + m);
+                cmin[l] = cmin[l].min(xa);
+                cmax[l] = cmax[l].max(xa);
+            };
+            let (xs, rs) = (p.x.chunks_exact(L), p.radius.chunks_exact(L));
+            let (xt, rt) = (xs.remainder(), rs.remainder());
+            for (x, r) in xs.zip(rs) {
+                for l in 0..L {
+                    take(l, &x[l], r[l]);
+                }
             }
+            for (l, (x, r)) in xt.iter().zip(rt).enumerate() {
+                take(l, x, *r);
+            }
+            let lo_of = |v: [f64; L]| v.into_iter().fold(f64::INFINITY, f64::min);
+            let hi_of = |v: [f64; L]| v.into_iter().fold(f64::NEG_INFINITY, f64::max);
+            (d.lo[a], d.hi[a]) = (lo_of(dlo), hi_of(dhi));
+            let (cmin, cmax) = (lo_of(cmin), hi_of(cmax));
             let small = 1e-4 * (hi0[a] - lo0[a]);
             (lo[a], hi[a]) = match (p.len(), self.shrink_min[a]) {
                 (0, _) => (lo0[a], hi0[a]),

@@ -26,6 +26,9 @@ pub(in crate::deck) struct Insertion {
     pub(super) streams: Vec<super::stream::Stream>,
     /// Insertion states read from a restart file, waiting for a `fix insert/stream` of their ID.
     pub(super) restored: Vec<super::stream::StreamState>,
+    /// Particle index by ID for the streams' particles in flight, kept between steps and rebuilt
+    /// only when an entry no longer points at its particle (after a sort or a new run's set-up).
+    pub(super) id_index: HashMap<i64, usize>,
 }
 
 impl Insertion {
