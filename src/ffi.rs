@@ -191,6 +191,7 @@ fn coeffs(c: &mcdem_pair_coeffs) -> Result<PairCoeffs, FfiError> {
         normal: crate::physics::NormalLaw::Hertz,
         cohesion: 0.0,
         tangential_reduce: false,
+        rolling_friction: 0.0,
         damping_ratio_t_n: c.damping_ratio_t_n,
     })
 }

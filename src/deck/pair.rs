@@ -64,6 +64,8 @@ pub(super) struct GranModel {
     pub(super) cohesion: bool,
     /// `tangential_reduce on|off` (cohesion sjkr; off by default): the Coulomb limit sees the cohesion.
     pub(super) tangential_reduce: bool,
+    /// `rolling_friction cdt` (`rolling_friction off`, the default: false).
+    pub(super) rolling: bool,
 }
 
 /// An `on|off` value of a model option.
@@ -123,6 +125,9 @@ impl GranModel {
         }
         if self.tangential_reduce && !self.cohesion {
             return Err("tangential_reduce is a setting of cohesion sjkr".into());
+        }
+        if self.rolling && (advanced || self.surface_mc) {
+            return Err(unsupported("rolling_friction cdt with a multi-contact model"));
         }
         if self.cohesion && (advanced || self.surface_mc) {
             return Err(unsupported("cohesion sjkr with a multi-contact model"));
@@ -240,6 +245,7 @@ impl Deck {
             kt_to_kn: false,
             cohesion: false,
             tangential_reduce: false,
+            rolling: false,
         };
         let mut k = start;
         while k < a.len() {
@@ -247,7 +253,16 @@ impl Deck {
             match (a[k], v) {
                 ("model", Some(x)) => m.model = Some(x.parse()?),
                 ("tangential", Some(x)) => m.tangential = tangential_model(x)?,
-                ("rolling_friction", Some("off")) => {}
+                ("rolling_friction", Some("off")) => m.rolling = false,
+                ("rolling_friction", Some("cdt")) => m.rolling = true,
+                ("rolling_friction", Some(x @ ("epsd" | "epsd2" | "epsd3"))) => {
+                    return Err(unsupported(&format!(
+                        "rolling_friction {x} (the elastic-plastic spring-dashpot rolling models; cdt or off)"
+                    )))
+                }
+                ("rolling_friction", Some(other)) => {
+                    return Err(unsupported(&format!("rolling model '{other}' (cdt or off)")))
+                }
                 ("cohesion", Some("off")) => m.cohesion = false,
                 ("cohesion", Some("sjkr")) => m.cohesion = true,
                 ("cohesion", Some(other)) => {
@@ -398,6 +413,21 @@ impl Deck {
             }
             if let Some(w) = wall_model.as_ref().filter(|w| w.cohesion) {
                 World::add_cohesion(&mut walls, nt, &ced, w.tangential_reduce)?;
+            }
+        }
+        if pair.rolling || wall_model.as_ref().is_some_and(|w| w.rolling) {
+            const NAME: &str = "coefficientRollingFriction";
+            if !self.props.contains_key(NAME) {
+                return Err(format!(
+                    "fix property/global {NAME} is missing (rolling_friction cdt needs 'fix ID all property/global {NAME} peratomtypepair N ...')"
+                ));
+            }
+            let mu_r = per_pair(self, NAME)?;
+            if pair.rolling {
+                World::add_rolling_friction(&mut self.world.coeffs, nt, &mu_r)?;
+            }
+            if wall_model.as_ref().is_some_and(|w| w.rolling) {
+                World::add_rolling_friction(&mut walls, nt, &mu_r)?;
             }
         }
         self.world.wall_coeffs = (walls != self.world.coeffs).then_some(walls);

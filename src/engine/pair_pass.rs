@@ -62,10 +62,13 @@ impl World {
 
     /// Whether the pair and wall passes evaluate in vectorised batches: they evaluate `tangential
     /// history` and the Hertz law with the radii of docs/spec.md §2; the LIGGGHTS `surface
-    /// multicontact` radii, `no_history` and `model hooke` take the pair-by-pair path.
+    /// multicontact` radii, `no_history`, `model hooke`, cohesion and rolling friction take the pair-by-pair path.
     pub(super) fn batched(&self) -> bool {
         let plain = |c: &PairCoeffs| {
-            c.tangential == Tangential::History && c.normal == NormalLaw::Hertz && c.cohesion == 0.0
+            c.tangential == Tangential::History
+                && c.normal == NormalLaw::Hertz
+                && c.cohesion == 0.0
+                && c.rolling_friction == 0.0
         };
         !self.liggghts_radii
             && self.coeffs.iter().all(plain)

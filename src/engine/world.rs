@@ -385,6 +385,19 @@ impl World {
 
     /// Adds LIGGGHTS' `cohesion sjkr` with the ntypes × ntypes `cohesionEnergyDensity` table to
     /// `table` (the pair or the wall coefficients); `tangential_reduce` as in [`PairCoeffs`].
+    /// Adds `rolling_friction cdt` with the per-type-pair coefficients `mu_r` to `table`.
+    pub fn add_rolling_friction(table: &mut [PairCoeffs], nt: usize, mu_r: &[f64]) -> Result<(), String> {
+        if mu_r.len() != table.len() {
+            return Err(format!("peratomtypepair tables must have {nt}×{nt} entries"));
+        }
+        for (k, c) in table.iter_mut().enumerate() {
+            *c = c
+                .with_rolling_friction(mu_r[k])
+                .map_err(|e| format!("types {} and {}: {e}", k / nt + 1, k % nt + 1))?;
+        }
+        Ok(())
+    }
+
     pub fn add_cohesion(
         table: &mut [PairCoeffs],
         nt: usize,

@@ -201,6 +201,9 @@ pub struct PairCoeffs {
     pub cohesion: f64,
     /// `tangential_reduce on` (of `cohesion sjkr`): the Coulomb limit sees the cohesive force.
     pub tangential_reduce: bool,
+    /// `rolling_friction cdt`: the pair's `coefficientRollingFriction` μ_r [-]
+    /// ([`super::rolling_cdt`]); 0 without rolling friction.
+    pub rolling_friction: f64,
     /// γ_t / γ_n = √(S_t / S_n) = √(4 G* / E*): a property of the pair of materials, so the
     /// tangential damping costs a product per contact instead of a square root. Derived: build
     /// with [`PairCoeffs::new`] or [`PairCoeffs::from_moduli`].
@@ -235,6 +238,7 @@ impl PairCoeffs {
             normal: NormalLaw::Hertz,
             cohesion: 0.0,
             tangential_reduce: false,
+            rolling_friction: 0.0,
             damping_ratio_t_n: (4.0 * g_star / e_star).sqrt(),
         }
     }
@@ -272,5 +276,11 @@ impl PairCoeffs {
     pub fn with_cohesion(self, energy_density: f64, tangential_reduce: bool) -> Result<Self, MaterialError> {
         let k = check("cohesionEnergyDensity", energy_density, "finite and >= 0", |v| v >= 0.0)?;
         Ok(Self { cohesion: k, tangential_reduce, ..self })
+    }
+
+    /// The same pair with `rolling_friction cdt` of coefficient `mu_r` ≥ 0.
+    pub fn with_rolling_friction(self, mu_r: f64) -> Result<Self, MaterialError> {
+        let m = check("coefficientRollingFriction", mu_r, "finite and >= 0", |v| v >= 0.0)?;
+        Ok(Self { rolling_friction: m, ..self })
     }
 }

@@ -9,6 +9,7 @@
 //!   sub-models.
 //! - [`hooke_hysteresis`]: LIGGGHTS' `model hooke/hysteresis` (Walton–Braun loop with adhesion).
 //! - [`sjkr`]: LIGGGHTS' `cohesion sjkr` (simplified JKR cohesion).
+//! - [`rolling_cdt`]: LIGGGHTS' `rolling_friction cdt` (constant directional rolling torque).
 //! - [`brodu2015`]: the standard multi-contact displacement (Brodu et al. 2015; Ghods et al. Eq. 2).
 //! - [`ghods2022`]: the advanced multi-contact switch (Ghods et al. Eq. 3 and App. A).
 //! - [`contact_set`]: the per-particle kernel that applies Eq. 2 (and Eq. 3) to all contacts of one particle.
@@ -26,6 +27,7 @@ pub mod hooke_hysteresis;
 pub mod lanes;
 pub mod material;
 pub mod pair;
+pub mod rolling_cdt;
 pub mod sjkr;
 pub mod timestep;
 

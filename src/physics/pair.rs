@@ -8,7 +8,7 @@ use std::fmt;
 use super::hertz::{self, NormalForce, Tangential};
 use super::material::{NormalLaw, PairCoeffs};
 use super::Vec3;
-use super::{hooke, hooke_hysteresis, sjkr};
+use super::{hooke, hooke_hysteresis, rolling_cdt, sjkr};
 
 /// Kinematic state of one spherical body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,6 +103,9 @@ struct Geometry {
     ri: f64,
     rj: f64,
     wall: bool,
+    /// Relative rolling velocity, read by the rolling friction only: ω_i − ω_j for a pair, the
+    /// rotation at the contact (r − δ/2) ω_i for a wall (LIGGGHTS `wr`).
+    wroll: Vec3,
 }
 
 // Always inlined: the caller then keeps only the fields it reads, instead of copying the whole
@@ -151,6 +154,16 @@ fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3, delta_max: &m
         // μ = 0: the history model gives exactly zero and resets ξ; skip the work.
         *shear = Vec3::zeros();
     }
+    if c.rolling_friction > 0.0 {
+        // `rolling_friction cdt` after the tangential model, as LIGGGHTS orders its sub-models;
+        // the wall's lever is the particle radius (see [`rolling_cdt`]).
+        let lever = if g.wall { g.ri } else { rolling_cdt::pair_lever(g.ri, g.rj) };
+        let t = rolling_cdt::torque(c.rolling_friction, normal.kn, g.overlap, lever, g.wroll, g.en);
+        torque_i += t;
+        if !g.wall {
+            torque_j -= t;
+        }
+    }
     ContactForce { force_i, torque_i, torque_j, en: g.en, overlap: g.overlap, point: g.point, normal }
 }
 
@@ -197,6 +210,7 @@ fn overlapping_pair(
         ri,
         rj,
         wall: false,
+        wroll: omega_i - omega_j,
     };
     forces(c, &g, dt, shear, delta_max)
 }
@@ -283,6 +297,7 @@ fn wall_geometry(d: Vec3, r: f64, ri: f64, point: Vec3, vr: Vec3, omega: Vec3, m
         ri,
         rj: 0.0,
         wall: true,
+        wroll: cri * omega,
     }
 }
 
@@ -405,6 +420,7 @@ impl CoeffLanes {
             normal: NormalLaw::Hertz,
             cohesion: 0.0,
             tangential_reduce: false,
+            rolling_friction: 0.0,
             damping_ratio_t_n: self.damping_ratio_t_n[l],
         }
     }

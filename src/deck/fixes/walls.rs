@@ -157,8 +157,8 @@ impl Deck {
         // geometryTolerance and updateEvery but not give other values (they would be ignored);
         // pairRadii concerns pairs only.
         let Some(p) = &self.pair else { return Err("fix wall/gran before pair_style gran".into()) };
-        // Two differences are allowed, both as LIGGGHTS runs them: a wall may leave out the pair
-        // style's cohesion (or have its own), and may run `hooke` beside `hooke/hysteresis` pairs.
+        // Three differences are allowed, as LIGGGHTS runs them: a wall may leave out the pair
+        // style's cohesion or rolling friction (or have its own), and may run `hooke` beside `hooke/hysteresis` pairs.
         if m.is_hysteresis() {
             return Err(unsupported(
                 "fix wall/gran model hooke/hysteresis (the walls keep no largest-overlap history; use model hooke for the walls)",
@@ -173,6 +173,9 @@ impl Deck {
         if let Some(w) = &self.wall_model {
             if (w.cohesion, w.tangential_reduce) != (m.cohesion, m.tangential_reduce) {
                 return Err(unsupported("walls with different cohesion settings"));
+            }
+            if w.rolling != m.rolling {
+                return Err(unsupported("walls with different rolling_friction settings"));
             }
         }
         self.wall_model = Some(m.clone());
