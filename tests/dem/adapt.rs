@@ -4,23 +4,11 @@
 //! FILE:LINE. The step-by-step comparison with LIGGGHTS is in `against_liggghts.rs`.
 
 use std::path::Path;
-use std::process::Command;
 
-/// Runs a deck in a fresh directory; returns success, the output and the directory.
+/// Runs a deck in a fresh directory (with a `post/` folder); returns success, the output and the
+/// directory.
 fn run_deck(text: &str) -> (bool, String, tempfile::TempDir) {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir_all(dir.path().join("post")).unwrap();
-    let deck = dir.path().join("in.adapt");
-    std::fs::write(&deck, text).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
-        .current_dir(dir.path())
-        .arg("run")
-        .arg(&deck)
-        .args(["-log", "none"])
-        .output()
-        .unwrap();
-    let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    (o.status.success(), all, dir)
+    super::deck::run_in("in.adapt", text, &[], &[("post/", "")])
 }
 
 /// Two spheres (d = 2 mm, 2500 and 1000 kg/m³) `gap` apart along x, at rest, no gravity, no walls.

@@ -4,9 +4,23 @@
 use std::path::Path;
 use std::process::Command;
 
-pub(crate) fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
+/// Runs `mcdem run` on `text`, written to `name` in a fresh directory beside `files` (name and
+/// contents; a name ending in `/` is a folder), with the `extra` arguments. Returns whether it
+/// succeeded, its stdout and stderr, and the directory (for the files the deck wrote).
+pub(crate) fn run_in(
+    name: &str,
+    text: &str,
+    extra: &[&str],
+    files: &[(&str, &str)],
+) -> (bool, String, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
-    let deck = dir.path().join("in.test");
+    for (file, body) in files {
+        match file.strip_suffix('/') {
+            Some(folder) => std::fs::create_dir_all(dir.path().join(folder)).unwrap(),
+            None => std::fs::write(dir.path().join(file), body).unwrap(),
+        }
+    }
+    let deck = dir.path().join(name);
     std::fs::write(&deck, text).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
         .current_dir(dir.path())
@@ -17,7 +31,12 @@ pub(crate) fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
         .output()
         .unwrap();
     let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    (o.status.success(), all)
+    (o.status.success(), all, dir)
+}
+
+pub(crate) fn run_deck(text: &str, extra: &[&str]) -> (bool, String) {
+    let (ok, out, _) = run_in("in.test", text, extra, &[]);
+    (ok, out)
 }
 
 pub(crate) const BASE: &str = "units si

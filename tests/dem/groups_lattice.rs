@@ -95,20 +95,8 @@ fn lattice_sites_in_a_tet_mesh_are_liggghts_atoms() {
 }
 
 fn run_deck(text: &str, files: &[(&str, &str)]) -> (bool, String) {
-    let dir = tempfile::tempdir().unwrap();
-    for (name, body) in files {
-        std::fs::write(dir.path().join(name), body).unwrap();
-    }
-    std::fs::write(dir.path().join("in.test"), text).unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mcdem"))
-        .current_dir(dir.path())
-        .args(["run", "in.test", "-log", "none"])
-        .output()
-        .unwrap();
-    (
-        o.status.success(),
-        format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)),
-    )
+    let (ok, out, _) = super::deck::run_in("in.test", text, &[], files);
+    (ok, out)
 }
 
 const BASE: &str = "units si

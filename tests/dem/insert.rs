@@ -8,20 +8,9 @@ use std::process::Command;
 
 /// Runs a deck in a fresh directory; returns success, stdout+stderr and the dump text (if any).
 fn run_deck(text: &str, extra: &[&str]) -> (bool, String, String) {
-    let dir = tempfile::tempdir().unwrap();
-    let deck = dir.path().join("in.test");
-    std::fs::write(&deck, text).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
-        .current_dir(dir.path())
-        .arg("run")
-        .arg(&deck)
-        .args(extra)
-        .args(["-log", "none"])
-        .output()
-        .unwrap();
-    let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let (ok, all, dir) = super::deck::run_in("in.test", text, extra, &[]);
     let dump = std::fs::read_to_string(dir.path().join("out.dump")).unwrap_or_default();
-    (o.status.success(), all, dump)
+    (ok, all, dump)
 }
 
 /// Rows `x y z radius mass` of the last frame of the dump, read by the project's dump parser and
