@@ -176,6 +176,30 @@ int32_t mcdem_particle_wall(const mcdem_pair_coeffs *coeffs, const mcdem_body *b
                             const double *wall_point, const double *wall_velocity, double dri,
                             double dt, double *shear, mcdem_contact_force *out);
 
+/* The settings of `model mc_advanced` on a deck line, one table for both engines
+ * (src/physics/mc_settings.rs): names, defaults, strict parsing and the wall/pair agreement all
+ * live in the library. Values are one double per setting (a choice as 0 or 1). */
+#define MCDEM_SETTING_MPR_TEST 0           /* mprTest abs|signed (0 abs, 1 signed) */
+#define MCDEM_SETTING_PAIR_RADII 1         /* pairRadii modified|stock (0 modified, 1 stock) */
+#define MCDEM_SETTING_GEOMETRY_TOLERANCE 2 /* geometryTolerance TOL, a number >= 0 */
+#define MCDEM_SETTING_UPDATE_EVERY 3       /* updateEvery K, a whole number 1 .. 1e9 */
+#define MCDEM_SETTINGS 4
+
+/* Keyword of setting k (static string); NULL when k is not a setting. */
+const char *mcdem_setting_name(int32_t k);
+
+/* Value of setting k when the line does not give it (NaN when k is not a setting). */
+double mcdem_setting_default(int32_t k);
+
+/* Reads the word after keyword k into *value; MCDEM_ERR_PARAMETER with a message naming the
+ * keyword, the word and what is expected. */
+int32_t mcdem_setting_parse(int32_t k, const char *word, double *value);
+
+/* A wall's settings (wall[], given[k] != 0 when its line gave setting k) against the pair
+ * style's (pair[]), MCDEM_SETTINGS entries each: MCDEM_ERR_PARAMETER naming the first setting a
+ * wall may only repeat and gives with another value. */
+int32_t mcdem_settings_check_wall(const double *wall, const uint8_t *given, const double *pair);
+
 /* Copies the last error message (NUL-terminated, truncated to len); returns its full length. */
 size_t mcdem_last_error(char *buf, size_t len);
 

@@ -234,8 +234,10 @@ private:
     std::vector<mcdem_contact_load> loads_;
     std::vector<double> delta_;
     std::vector<uint8_t> fallback_;
-    // Which shared settings this model's deck line gave (SharedSetting order).
-    bool given_[kSharedSettings];
+    // The settings as the library's table reads them (MCDEM_SETTING_* order; the typed fields
+    // above are set from them once parsed) and which of them this model's deck line gave.
+    double settings_[MCDEM_SETTINGS];
+    bool given_[MCDEM_SETTINGS];
     // The pair style's model of each LIGGGHTS instance (set when its settings are parsed), whose
     // shared settings apply to the instance's walls. Keyed by instance: a program may open several.
     static std::map<LAMMPS *, NormalModel *> pair_models_;

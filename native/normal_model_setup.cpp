@@ -7,8 +7,8 @@
 
 namespace mcdem_shim {
 
-// `mprTest abs|signed` and the other keywords of settings.h are not on/off, yes/no or plain
-// double keywords, the only ones Settings offers publicly: they go into its private table.
+// The keywords of settings.h are not on/off, yes/no or plain double keywords, the only ones
+// Settings offers publicly: they go into its private table.
 struct SettingsTableTag {
     typedef std::map<std::string, Setting *> Settings::*type;
     friend type private_member(SettingsTableTag);
@@ -34,7 +34,10 @@ NormalModel<MC_ADVANCED>::NormalModel(LAMMPS *lmp, IContactHistorySetup *hsetup,
       cache_(NULL),
       ntypes_(0),
       sources_ready_(false) {
-    for (int k = 0; k < kSharedSettings; k++) given_[k] = false;
+    for (int k = 0; k < MCDEM_SETTINGS; k++) {
+        settings_[k] = mcdem_setting_default(k);
+        given_[k] = false;
+    }
     // Per-contact record read by the next step's radius changes: pairs the two modified radii
     // (see write_pair_record) and |F_n|; walls the contact point relative to the centre and
     // |F_n| (the layout LIGGGHTS's HistoryData expects).
@@ -65,22 +68,17 @@ void NormalModel<MC_ADVANCED>::registerSettings(Settings &settings) {
     settings.registerOnOff("tangential_damping", tangential_damping_, true);
     settings.registerOnOff("limitForce", limit_force_);
     std::map<std::string, Setting *> &table = settings.*private_member(SettingsTableTag());
-    if (table.find("mprTest") == table.end())
-        table["mprTest"] = new ChoiceSetting("mprTest", "abs", "signed", &signed_test_, &given_[kMprTest]);
-    if (table.find("pairRadii") == table.end())
-        table["pairRadii"] =
-            new ChoiceSetting("pairRadii", "modified", "stock", &stock_pair_radii_, NULL);
-    if (table.find("geometryTolerance") == table.end())
-        table["geometryTolerance"] = new StrictSetting<double, parse_nonnegative>(
-            "geometryTolerance", &geometry_tolerance_, &given_[kGeometryTolerance],
-            "a finite number >= 0 (a fraction of the particle radius)");
-    if (table.find("updateEvery") == table.end())
-        table["updateEvery"] =
-            new StrictSetting<int, parse_step_count>("updateEvery", &update_every_, &given_[kUpdateEvery],
-                                                    "a whole number of steps from 1 to 1000000000");
+    for (int k = 0; k < MCDEM_SETTINGS; k++) {
+        const char *name = mcdem_setting_name(k);
+        if (table.find(name) == table.end()) table[name] = new CoreSetting(k, &settings_[k], &given_[k]);
+    }
 }
 
 void NormalModel<MC_ADVANCED>::postSettings(IContactHistorySetup *, ContactModelBase *) {
+    signed_test_ = settings_[MCDEM_SETTING_MPR_TEST] != 0.0;
+    stock_pair_radii_ = settings_[MCDEM_SETTING_PAIR_RADII] != 0.0;
+    geometry_tolerance_ = settings_[MCDEM_SETTING_GEOMETRY_TOLERANCE];
+    update_every_ = static_cast<int>(settings_[MCDEM_SETTING_UPDATE_EVERY]);
     if (cmb_->is_wall()) return;
     pair_models_[lmp] = this;
     // Switches on the library's per-contact radius storage, read by the pair and wall loops
@@ -128,35 +126,15 @@ void NormalModel<MC_ADVANCED>::connectToProperties(PropertyRegistry &) {
     sources_ready_ = false;
 }
 
-// Stops a deck whose wall gives a shared setting (see SharedSetting) another value than the
-// pair style's, instead of ignoring it.
+// Stops a deck whose wall gives a setting of the pair style's multi-contact pass another value
+// than the pair style's, instead of ignoring it (the library decides which and says so).
 void NormalModel<MC_ADVANCED>::check_wall_settings() const {
     std::map<LAMMPS *, NormalModel *>::const_iterator it = pair_models_.find(lmp);
     if (it == pair_models_.end()) return;
-    const NormalModel *p = it->second;
-    char mine[64], theirs[64];
-    const char *name = NULL;
-    if (given_[kMprTest] && signed_test_ != p->signed_test_) {
-        name = "mprTest";
-        std::snprintf(mine, sizeof(mine), "%s", signed_test_ ? "signed" : "abs");
-        std::snprintf(theirs, sizeof(theirs), "%s", p->signed_test_ ? "signed" : "abs");
-    } else if (given_[kGeometryTolerance] && geometry_tolerance_ != p->geometry_tolerance_) {
-        name = "geometryTolerance";
-        std::snprintf(mine, sizeof(mine), "%g", geometry_tolerance_);
-        std::snprintf(theirs, sizeof(theirs), "%g", p->geometry_tolerance_);
-    } else if (given_[kUpdateEvery] && update_every_ != p->update_every_) {
-        name = "updateEvery";
-        std::snprintf(mine, sizeof(mine), "%d", update_every_);
-        std::snprintf(theirs, sizeof(theirs), "%d", p->update_every_);
-    }
-    if (!name) return;
-    char msg[512];
-    std::snprintf(msg, sizeof(msg),
-                  "fix wall/gran with model mc_advanced: %s %s differs from the pair style's %s %s (the pair "
-                  "style computes the radius changes of every contact, walls included: set it there, or "
-                  "repeat its value here)",
-                  name, mine, name, theirs);
-    error->all(FLERR, msg);
+    uint8_t given[MCDEM_SETTINGS];
+    for (int k = 0; k < MCDEM_SETTINGS; k++) given[k] = given_[k];
+    if (mcdem_settings_check_wall(settings_, given, it->second->settings_) != MCDEM_OK)
+        error->all(FLERR, last_mcdem_error().c_str());
 }
 
 FixPropertyGlobal *NormalModel<MC_ADVANCED>::find_property(const char *name, const char *kind, int len, const char *usage) {

@@ -104,11 +104,6 @@ const char *const kRecordName = "mcdem_mc_record";
 // `neigh_modify contact_distance_factor`.
 const double kContactDistanceFactor = 1.2;
 
-// Model settings that only the pair style's model applies: it computes the radius changes of every
-// contact, walls included. A wall may repeat them but not give other values (they would be ignored).
-// pairRadii concerns pairs only (a wall contact always uses the modified radius): walls may give any.
-enum SharedSetting { kMprTest, kGeometryTolerance, kUpdateEvery, kSharedSettings };
-
 // A pair's record (after its two radii and |F_n|): the radius changes of the partner with the
 // smaller and with the larger atom ID at this contact.
 const int kPairDrLo = 3;

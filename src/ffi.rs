@@ -15,6 +15,7 @@ use crate::physics::contact_set::{
 use crate::physics::ghods2022::{Cap, MprTest};
 use crate::physics::hertz;
 use crate::physics::material::{check_poisson_ratio, check_youngs_modulus, Material, PairCoeffs};
+use crate::physics::mc_settings::{check_wall, McSetting, MC_SETTINGS};
 use crate::physics::pair::{self, Body, ContactError, ContactForce, PairLanes, WallPoint};
 use crate::physics::Vec3;
 
@@ -571,6 +572,69 @@ pub unsafe extern "C" fn mcdem_particle_wall(
         sh.copy_from_slice(s.as_slice());
         write_contact(out, r);
         Ok(())
+    })
+}
+
+/// Keyword of setting `k` of `model mc_advanced` (`MCDEM_SETTING_*`, `physics::mc_settings`), a
+/// static NUL-terminated string; null when `k` is not a setting (the shim loops until it is).
+#[no_mangle]
+pub extern "C" fn mcdem_setting_name(k: i32) -> *const c_char {
+    McSetting::from_index(k).map_or(std::ptr::null(), |s| s.c_name().as_ptr())
+}
+
+/// Value of setting `k` when the deck line does not give it (NaN when `k` is not a setting).
+#[no_mangle]
+pub extern "C" fn mcdem_setting_default(k: i32) -> f64 {
+    McSetting::from_index(k).map_or(f64::NAN, McSetting::default_value)
+}
+
+fn setting(k: i32) -> Result<McSetting, FfiError> {
+    McSetting::from_index(k).ok_or_else(|| param(format!("no model setting with index {k}")))
+}
+
+/// Reads the deck word after keyword `k` into `*value` (a choice as 0 or 1); on a bad word
+/// `MCDEM_ERR_PARAMETER` with the message both engines print, naming keyword, word and what is
+/// expected.
+/// # Safety
+/// `word` must be null (rejected) or a NUL-terminated string; `value` null (rejected) or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mcdem_setting_parse(k: i32, word: *const c_char, value: *mut f64) -> i32 {
+    guard(|| {
+        let s = setting(k)?;
+        let word = non_null(word, "word")?;
+        // SAFETY: non-null, NUL-terminated by the caller's promise.
+        let word = unsafe { std::ffi::CStr::from_ptr(word) }.to_string_lossy();
+        *non_null_mut(value, "value")? = s.parse(&word).map_err(param)?;
+        Ok(())
+    })
+}
+
+/// Checks a wall's settings against the pair style's (`MCDEM_SETTINGS` entries each; `given[k]`
+/// non-zero when the wall line gave setting `k`): `MCDEM_ERR_PARAMETER` naming the first shared
+/// setting that differs.
+/// # Safety
+/// Each pointer must be null (rejected) or valid for `MCDEM_SETTINGS` elements.
+#[no_mangle]
+pub unsafe extern "C" fn mcdem_settings_check_wall(
+    wall: *const f64,
+    given: *const u8,
+    pair: *const f64,
+) -> i32 {
+    guard(|| {
+        let n = MC_SETTINGS.len();
+        let (wall, given, pair) =
+            (non_null(wall, "wall")?, non_null(given, "given")?, non_null(pair, "pair")?);
+        // SAFETY: each holds MCDEM_SETTINGS elements by the caller's promise.
+        let (wall, given, pair) = unsafe {
+            (
+                std::slice::from_raw_parts(wall, n),
+                std::slice::from_raw_parts(given, n),
+                std::slice::from_raw_parts(pair, n),
+            )
+        };
+        let arr = |x: &[f64]| -> [f64; 4] { std::array::from_fn(|k| x[k]) };
+        let given: [bool; 4] = std::array::from_fn(|k| given[k] != 0);
+        check_wall(&arr(wall), &given, &arr(pair)).map_err(param)
     })
 }
 

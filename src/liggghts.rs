@@ -25,7 +25,7 @@ extern "C" {
 /// equal to the `mcdem_*` calls in `native/*.cpp` and `native/*.h`.
 fn keep_abi_symbols() {
     use crate::ffi::*;
-    let table: [*const c_void; 12] = [
+    let table: [*const c_void; 16] = [
         mcdem_validate_mc_params as *const c_void,
         mcdem_pair_coeffs_new as *const c_void,
         mcdem_check_overlap as *const c_void,
@@ -38,6 +38,10 @@ fn keep_abi_symbols() {
         mcdem_influence_cache_new as *const c_void,
         mcdem_influence_cache_free as *const c_void,
         mcdem_last_error as *const c_void,
+        mcdem_setting_name as *const c_void,
+        mcdem_setting_default as *const c_void,
+        mcdem_setting_parse as *const c_void,
+        mcdem_settings_check_wall as *const c_void,
     ];
     std::hint::black_box(table);
 }

@@ -2,6 +2,7 @@
 //! closure built from the `fix property/global` values when a run starts.
 
 use super::*;
+use crate::physics::mc_settings::{self, McSetting};
 
 /// The normal contact law a `model` keyword names: parsed once, so every later decision is a
 /// `match` the compiler checks rather than a string compared in several places.
@@ -78,17 +79,31 @@ fn on_off(key: &str, x: &str) -> R<bool> {
 }
 
 impl GranModel {
+    /// The multi-contact settings as the shared table holds them (`physics::mc_settings`), the
+    /// defaults where the line gives none.
+    pub(super) fn mc_values(&self) -> [f64; 4] {
+        [
+            f64::from(u8::from(self.mpr_test == MprTest::Signed)),
+            f64::from(u8::from(self.stock_pair_radii)),
+            self.geometry_tolerance.unwrap_or(McSetting::GeometryTolerance.default_value()),
+            self.update_every.map_or(McSetting::UpdateEvery.default_value(), |k| k as f64),
+        ]
+    }
+
     /// One model setting `key value` of a `pair_style gran` or `fix wall/gran` line; false if `key`
     /// is not a model setting (the caller decides what else it may be).
     pub(super) fn setting(&mut self, key: &str, v: Option<&str>) -> R<bool> {
         match (key, v) {
-            ("mprTest", Some(x)) => self.mpr_test = x.parse()?,
-            ("geometryTolerance", Some(x)) => self.geometry_tolerance = Some(geometry_tolerance(x)?),
-            ("updateEvery", Some(x)) => self.update_every = Some(update_every(x)?),
-            ("pairRadii", Some("modified")) => self.stock_pair_radii = false,
-            ("pairRadii", Some("stock")) => self.stock_pair_radii = true,
-            ("pairRadii", Some(x)) => {
-                return Err(format!("pairRadii must be 'modified' or 'stock', got '{x}'"))
+            // The multi-contact settings: one table for this reader and the plugin.
+            (key, Some(x)) if McSetting::from_name(key).is_some() => {
+                let s = McSetting::from_name(key).expect("matched above");
+                let v = s.parse(x)?;
+                match s {
+                    McSetting::MprTest => self.mpr_test = mc_settings::mpr_test(v),
+                    McSetting::PairRadii => self.stock_pair_radii = v != 0.0,
+                    McSetting::GeometryTolerance => self.geometry_tolerance = Some(v),
+                    McSetting::UpdateEvery => self.update_every = Some(v as u64),
+                }
             }
             ("tangential_damping", Some(x)) => self.tangential_damping = on_off(key, x)?,
             ("limitForce", Some(x)) => self.limit_force = on_off(key, x)?,
@@ -207,28 +222,8 @@ impl GranModel {
     }
 }
 
-/// `geometryTolerance` value: a finite number ≥ 0 (a fraction of the particle radius).
-pub(super) fn geometry_tolerance(x: &str) -> R<f64> {
-    match x.parse::<f64>() {
-        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
-        _ => Err(format!(
-            "geometryTolerance must be a finite number >= 0 (a fraction of the particle radius), got '{x}'"
-        )),
-    }
-}
-
 /// Largest `updateEvery` (both engines; the plugin keeps it in an `int`).
-pub const MAX_UPDATE_EVERY: u64 = 1_000_000_000;
-
-/// `updateEvery` value: a whole number of steps from 1 to [`MAX_UPDATE_EVERY`].
-pub(super) fn update_every(x: &str) -> R<u64> {
-    match x.parse::<u64>() {
-        Ok(k) if (1..=MAX_UPDATE_EVERY).contains(&k) => Ok(k),
-        _ => Err(format!(
-            "updateEvery must be a whole number of steps from 1 to {MAX_UPDATE_EVERY}, got '{x}'"
-        )),
-    }
-}
+pub use crate::physics::mc_settings::MAX_UPDATE_EVERY;
 
 impl Deck {
     pub(super) fn gran_model(a: &[&str], start: usize) -> R<(GranModel, usize)> {

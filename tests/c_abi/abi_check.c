@@ -123,5 +123,20 @@ int main(void) {
     mcdem_body deep = bw;
     deep.x[2] = 0.1e-3; /* 0.1 mm from the wall with a grown radius: overlap 1.1 r */
     print_error("deep", mcdem_particle_wall(&c, &deep, wp, wv, 0.2e-3, 1e-5, sw, &f));
+
+    /* The model settings: the header's indices are the library's table. */
+    for (int k = 0; k <= MCDEM_SETTINGS; k++) {
+        const char *name = mcdem_setting_name(k);
+        printf("setting%d %s\nsetting%d_default %.17g\n", k, name ? name : "(null)", k, mcdem_setting_default(k));
+    }
+    printf("setting_indices %d %d %d %d\n", MCDEM_SETTING_MPR_TEST, MCDEM_SETTING_PAIR_RADII,
+           MCDEM_SETTING_GEOMETRY_TOLERANCE, MCDEM_SETTING_UPDATE_EVERY);
+    double sv = -1.0;
+    rc = mcdem_setting_parse(MCDEM_SETTING_MPR_TEST, "signed", &sv);
+    printf("setting_parse_rc %d\nsetting_parse_value %.17g\n", rc, sv);
+    print_error("setting_bad", mcdem_setting_parse(MCDEM_SETTING_UPDATE_EVERY, "2.5", &sv));
+    double pair_s[MCDEM_SETTINGS] = {0.0, 0.0, 0.0, 10.0}, wall_s[MCDEM_SETTINGS] = {0.0, 1.0, 0.0, 5.0};
+    uint8_t given_s[MCDEM_SETTINGS] = {0, 1, 0, 1};
+    print_error("setting_wall", mcdem_settings_check_wall(wall_s, given_s, pair_s));
     return 0;
 }

@@ -161,16 +161,21 @@ fn update_every_is_checked_and_belongs_to_mc_advanced() {
     let wall = "fix w all wall/gran model mc_advanced tangential history primitive type 1 zplane -0.01 updateEvery 5";
     let with_wall = |wall: &str| mc("updateEvery 10").replace("run 1\n", &format!("{wall}\nrun 1\n"));
     let (ok, out) = run_deck(&with_wall(wall), &[]);
-    assert!(!ok && out.contains("wall/gran updateEvery 5 differs from the pair style's"), "{out}");
+    assert!(
+        !ok && out.contains(
+            "wall/gran with model mc_advanced: updateEvery 5 differs from the pair style's updateEvery 10"
+        ),
+        "{out}"
+    );
     let tol = wall.replace("updateEvery 5", "geometryTolerance 1e-3");
     let (ok, out) = run_deck(&with_wall(&tol), &[]);
-    assert!(!ok && out.contains("wall/gran geometryTolerance 1e-3 differs from the pair style's"), "{out}");
+    assert!(!ok && out.contains("wall/gran with model mc_advanced: geometryTolerance 0.001 differs from the pair style's geometryTolerance 0"), "{out}");
     // Settings before the geometry count the same.
     let before = wall
         .replace("history primitive", "history geometryTolerance 1e-3 primitive")
         .replace(" updateEvery 5", "");
     let (ok, out) = run_deck(&with_wall(&before), &[]);
-    assert!(!ok && out.contains("wall/gran geometryTolerance 1e-3 differs from the pair style's"), "{out}");
+    assert!(!ok && out.contains("wall/gran with model mc_advanced: geometryTolerance 0.001 differs from the pair style's geometryTolerance 0"), "{out}");
     // Repeating the pair style's values is fine.
     let same = wall.replace("updateEvery 5", "updateEvery 10 geometryTolerance 0");
     let (ok, out) = run_deck(&with_wall(&same), &[]);

@@ -90,6 +90,22 @@ fn c_program_agrees_with_the_rust_core() {
     assert_eq!(num("sizeof_contact_force") as usize, std::mem::size_of::<mcdem::ffi::mcdem_contact_force>());
     assert_eq!(v["version"], env!("CARGO_PKG_VERSION"));
 
+    // The model settings: names and defaults from the one table, the header's indices its order,
+    // and the library's messages reach a C caller.
+    use mcdem::physics::mc_settings::MC_SETTINGS;
+    for (k, s) in MC_SETTINGS.iter().enumerate() {
+        assert_eq!(v[&format!("setting{k}")], s.name());
+        assert_eq!(num(&format!("setting{k}_default")), s.default_value());
+    }
+    assert_eq!(v[&format!("setting{}", MC_SETTINGS.len())], "(null)");
+    assert_eq!(v["setting_indices"], "0 1 2 3");
+    assert_eq!((num("setting_parse_rc"), num("setting_parse_value")), (0.0, 1.0));
+    assert_eq!(num("setting_bad_code") as i32, mcdem::ffi::MCDEM_ERR_PARAMETER);
+    assert!(v["setting_bad_msg"].contains("updateEvery must be a whole number"), "{}", v["setting_bad_msg"]);
+    assert_eq!(num("setting_wall_code") as i32, mcdem::ffi::MCDEM_ERR_PARAMETER);
+    let wall = &v["setting_wall_msg"];
+    assert!(wall.contains("updateEvery 5 differs from the pair style's updateEvery 10"), "{wall}");
+
     let m = Material::hertz(23.3e3, 0.5).unwrap();
     let c = PairCoeffs::new(&m, &m, 0.95, 0.03).unwrap();
     assert_eq!(num("coeffs_rc"), 0.0);

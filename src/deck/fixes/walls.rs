@@ -1,6 +1,7 @@
 //! `fix mesh/surface[/stress]` and `fix wall/gran` (primitive planes and meshes).
 
 use crate::deck::*;
+use crate::physics::mc_settings::{self, MC_SETTINGS};
 
 impl Deck {
     pub(in crate::deck) fn mesh_index(&self, fix_id: &str) -> R<usize> {
@@ -179,17 +180,8 @@ impl Deck {
             }
         }
         self.wall_model = Some(m.clone());
-        let given = |key: &str| a.iter().rposition(|w| *w == key).and_then(|i| a.get(i + 1));
-        let agrees = [
-            ("mprTest", p.mpr_test == m.mpr_test),
-            ("geometryTolerance", p.geometry_tolerance.unwrap_or(0.0) == m.geometry_tolerance.unwrap_or(0.0)),
-            ("updateEvery", p.update_every.unwrap_or(1) == m.update_every.unwrap_or(1)),
-        ];
-        for (key, same) in agrees {
-            if let (Some(x), false) = (given(key), same) {
-                return Err(format!("wall/gran {key} {x} differs from the pair style's"));
-            }
-        }
+        let given = MC_SETTINGS.map(|s| a.contains(&s.name()));
+        mc_settings::check_wall(&m.mc_values(), &given, &p.mc_values())?;
         self.world.walls.push(WallFix { name: a[1].into(), geom });
         Ok(FixKind::Wall(self.world.walls.len() - 1))
     }
