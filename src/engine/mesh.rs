@@ -19,6 +19,7 @@
 
 use std::collections::HashMap;
 
+use super::mesh_motion::{Mover, Pose};
 use crate::physics::Vec3;
 
 /// Relative width of the band within which a direction counts as perpendicular to an edge or as
@@ -72,7 +73,7 @@ pub struct Mesh {
     /// Per triangle: the conveyor velocity of `surface_vel` (empty when the mesh has none).
     pub surface_vel: Vec<Vec3>,
     /// The `fix move/mesh` driving the mesh, if any.
-    pub mover: Option<super::mesh_motion::Mover>,
+    pub mover: Option<Mover>,
     /// Force on the mesh [N] (minus the sum of its contact forces on the particles).
     pub force: Vec3,
     /// Torque-free bookkeeping only: the stress fix reports force components 1..3.
@@ -83,15 +84,6 @@ pub struct Mesh {
     edge_dirs: Vec<Vec3>,
     corner_dirs: Vec<Vec3>,
     coplanar: Vec<u32>,
-}
-
-/// A mesh's node positions and contact directions at one time (the reference of a turning
-/// motion).
-#[derive(Debug, Clone)]
-pub struct Pose {
-    tris: Vec<[Vec3; 3]>,
-    edge_dirs: Vec<Vec3>,
-    corner_dirs: Vec<Vec3>,
 }
 
 /// Where on its triangle a contact point lies; a contact found by several triangles keeps the
@@ -405,6 +397,35 @@ impl Mesh {
                 }
             })
             .collect();
+    }
+
+    /// One step of the mover (if any): sets the mesh's velocity field for the step and moves
+    /// the nodes by the step's increment. Returns the largest node displacement.
+    pub fn advance_motion(&mut self, dt: f64) -> f64 {
+        let Some(mut mv) = self.mover.take() else { return 0.0 };
+        let step = mv.advance(dt, || self.pose());
+        self.velocity = step.velocity;
+        let travel = match step.turn {
+            Some(t) => {
+                self.omega = t.omega;
+                self.origin = t.origin;
+                self.place_turned(t.start, &t.axis, t.angle, &t.origin)
+            }
+            None => {
+                let d = step.velocity * dt;
+                self.translate(&d);
+                d.norm()
+            }
+        };
+        self.mover = Some(mv);
+        travel
+    }
+
+    /// `unfix` of the mover: the mesh stays where it is, at rest.
+    pub fn stop_motion(&mut self) {
+        self.mover = None;
+        self.velocity = Vec3::zeros();
+        self.omega = Vec3::zeros();
     }
 
     /// The node positions and contact directions, as the reference a turning motion starts from.

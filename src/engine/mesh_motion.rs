@@ -14,7 +14,6 @@
 //! from LIGGGHTS' positions only by that drift. The velocity field the contacts read in the step
 //! is v + ω × (x − origin).
 
-use super::mesh::{Mesh, Pose};
 use crate::physics::Vec3;
 
 /// One `fix move/mesh` form; angular frequencies are 2π / period.
@@ -51,6 +50,32 @@ impl Motion {
     }
 }
 
+/// A mesh's node positions and contact directions at one time (the reference of a turning
+/// motion).
+#[derive(Debug, Clone)]
+pub struct Pose {
+    pub(super) tris: Vec<[Vec3; 3]>,
+    pub(super) edge_dirs: Vec<Vec3>,
+    pub(super) corner_dirs: Vec<Vec3>,
+}
+
+/// What one step of a mover does to its mesh: the velocity field's translation and, for a turn,
+/// the mesh placed from its start pose by the angle summed since.
+pub struct MotionStep<'a> {
+    pub velocity: Vec3,
+    pub turn: Option<Turn<'a>>,
+}
+
+/// A turning step: ω (axis × angular speed), the axis through `origin`, and the angle turned
+/// since `start`, the pose the motion began from.
+pub struct Turn<'a> {
+    pub omega: Vec3,
+    pub axis: Vec3,
+    pub origin: Vec3,
+    pub angle: f64,
+    pub start: &'a Pose,
+}
+
 /// A `fix move/mesh` at work: its motion, the time since the fix was made and, for a turn, the
 /// pose it began from and the angle turned since.
 #[derive(Debug, Clone)]
@@ -71,46 +96,28 @@ impl Mover {
     }
 }
 
-impl Mesh {
-    /// One step of the mover (if any): sets the mesh's velocity field for the step and moves
-    /// the nodes by the step's increment. Returns the largest node displacement.
-    pub fn advance_motion(&mut self, dt: f64) -> f64 {
-        let Some(mut mv) = self.mover.take() else { return 0.0 };
-        mv.time += dt;
-        let (v, spin) = mv.motion.rates(mv.time);
-        self.velocity = v;
-        let travel = match mv.motion.pivot() {
-            Some((axis, origin)) => {
-                let start = mv.start.get_or_insert_with(|| self.pose());
-                let y = spin * dt - mv.angle_carry;
-                let sum = mv.angle + y;
-                mv.angle_carry = (sum - mv.angle) - y;
-                mv.angle = sum;
-                self.omega = axis * spin;
-                self.origin = origin;
-                self.place_turned(start, &axis, mv.angle, &origin)
-            }
-            None => {
-                let d = v * dt;
-                self.translate(&d);
-                d.norm()
-            }
-        };
-        self.mover = Some(mv);
-        travel
-    }
-
-    /// `unfix` of the mover: the mesh stays where it is, at rest.
-    pub fn stop_motion(&mut self) {
-        self.mover = None;
-        self.velocity = Vec3::zeros();
-        self.omega = Vec3::zeros();
+impl Mover {
+    /// One step of `dt`: the fix's clock advanced and the step's motion. `pose` gives the mesh's
+    /// current pose, taken as the start the first time a turning motion steps.
+    pub fn advance(&mut self, dt: f64, pose: impl FnOnce() -> Pose) -> MotionStep<'_> {
+        self.time += dt;
+        let (velocity, spin) = self.motion.rates(self.time);
+        let turn = self.motion.pivot().map(|(axis, origin)| {
+            let y = spin * dt - self.angle_carry;
+            let sum = self.angle + y;
+            self.angle_carry = (sum - self.angle) - y;
+            self.angle = sum;
+            let start = self.start.get_or_insert_with(pose);
+            Turn { omega: axis * spin, axis, origin, angle: self.angle, start }
+        });
+        MotionStep { velocity, turn }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::mesh::Mesh;
 
     fn tetra() -> Mesh {
         let p = [
