@@ -15,7 +15,7 @@
 //! - (b) **p̂ → 0 extrapolation**: per ν, the exponent β for which p̂^(1/β) is most nearly linear
 //!   in φ over the quasi-static points (least 1 − R²), and φ_c where that line reaches 0 (the usual
 //!   way of extrapolating a pressure to zero without fixing β, e.g. O'Hern et al., Phys. Rev. E 68,
-//!   011306 (2003), Sec. IV); mean and standard deviation over ν.
+//!   011306 (2003)); mean and standard deviation over ν.
 
 use std::collections::BTreeMap;
 
