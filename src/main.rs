@@ -213,12 +213,16 @@ enum Study {
         /// Only the cost-vs-N measurement (no grid run is started; finished runs are still reported)
         #[arg(long, conflicts_with = "no_cost")]
         cost_only: bool,
+        /// Rewrite runs.csv, response_surface.csv, the plots and report.md from the finished runs in
+        /// DIR/runs and the cached cost rows only: nothing is run or measured
+        #[arg(long, conflicts_with = "cost_only")]
+        report_only: bool,
     },
 }
 
 fn study(s: Study) -> Result<(), String> {
     match s {
-        Study::Shear { grid, out, n, gamma, mpr, mu, nu, threads, no_cost, cost_only } => {
+        Study::Shear { grid, out, n, gamma, mpr, mu, nu, threads, no_cost, cost_only, report_only } => {
             use mcdem::study::shear;
             let mut g = if grid == "full" { shear::Grid::full() } else { shear::Grid::quick() };
             if let Some(n) = n {
@@ -243,10 +247,15 @@ fn study(s: Study) -> Result<(), String> {
                 g.cost_sizes.clear();
             }
             let out = out.unwrap_or_else(|| PathBuf::from(format!("validation/shear_{grid}")));
-            let opts = shear::Options { grid: g, out: out.clone(), threads, cost_only };
+            let opts = shear::Options { grid: g, out: out.clone(), threads, cost_only, report_only };
             let sum = shear::run(&opts, &|l| eprintln!("{l}"))?;
             for (mu, (pc, lo)) in &sum.phi_c {
-                println!("mu {mu}: phi_c {pc:.4} (searched from {lo})");
+                println!("mu {mu}: phi_c {pc:.4} (free fit, searched from {lo})");
+            }
+            for j in &sum.jamming {
+                if let Some((pc, err, src)) = j.data {
+                    println!("mu {}: phi_c {pc:.4} +- {err:.4} from the rate data ({src})", j.mu);
+                }
             }
             // A (μ, ν) without quasi-static points has no fit (all of them in a cost-only call).
             for r in sum.surface.iter().filter(|r| r.points > 0) {
@@ -268,6 +277,13 @@ fn study(s: Study) -> Result<(), String> {
                 );
             }
             if other.is_empty() {
+                Ok(())
+            } else if report_only {
+                // Rewriting the report does not settle the stops: say so, but the report is written.
+                eprintln!(
+                    "note: {} run(s) stopped for a numerical reason or are unclassified (listed in the report)",
+                    other.len()
+                );
                 Ok(())
             } else {
                 Err(format!(

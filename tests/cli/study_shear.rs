@@ -48,6 +48,7 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
         out: dir.path().join("below"),
         threads: 2,
         cost_only: false,
+        report_only: false,
     };
     let s = run(&below, &say).unwrap();
     assert_eq!((s.ran, s.skipped), (2, 0));
@@ -63,6 +64,7 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
         out: dir.path().join("above"),
         threads: 2,
         cost_only: false,
+        report_only: false,
     };
     let s = run(&above, &say).unwrap();
     let r = ratio(&s.results);
@@ -80,6 +82,13 @@ fn bagnold_below_jamming_rate_independent_above_resumable() {
     bigger.grid.gamma_hats.push(2e-2);
     let c = run(&bigger, &say).unwrap();
     assert_eq!((c.ran, c.skipped, c.results.len()), (0, 2, 2));
+    // `--report-only` likewise starts no run (nor a cost measurement) and rewrites the outputs.
+    let mut rewrite = bigger.clone();
+    rewrite.cost_only = false;
+    rewrite.report_only = true;
+    rewrite.grid.cost_sizes = vec![64];
+    let c = run(&rewrite, &say).unwrap();
+    assert_eq!((c.ran, c.skipped, c.results.len(), c.cost.len()), (0, 2, 2, 0));
     // Output files, with finite numbers in runs.csv.
     for name in
         ["runs.csv", "response_surface.csv", "report.md", "p_vs_rate_mu0.5_nu0.5.png", "alpha_vs_nu.png"]
@@ -164,6 +173,37 @@ fn response_surface_has_rows_only_where_runs_finished() {
         assert!(r.points >= 3 && r.alpha.is_finite() && r.beta.is_finite(), "{r:?}");
     }
     assert_eq!(phi_c.len(), 1);
+}
+
+/// The recorded N = 2000 grid at μ = 0: φ = 0.65 passes the quasi-static test at ν = 0.45 only
+/// (n = 0.498 there, 0.51–0.53 at the other ν), so it enters no ν's fit; every ν is fitted over
+/// φ = 0.7 … 0.9. φ_c from the rate exponent lies between 0.65 (n̄ = 0.52) and 0.7 (n̄ = 0.18), and
+/// the p̂ → 0 extrapolation lies below it (the two routes bracket φ_c).
+#[test]
+fn recorded_frictionless_grid_one_quasi_static_set_and_phi_c_from_rates() {
+    use mcdem::study::shear::{jamming, qs_sets, Crossing, RatePoint};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("validation/shear_full/runs");
+    let mut pts = Vec::new();
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.contains("_mu0.000_") && name.ends_with(".json") {
+            let r: RunResult = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            pts.push(RatePoint::of(&r));
+        }
+    }
+    assert_eq!(pts.len(), 126, "7 φ × 6 ν × 3 rates at μ = 0");
+    let sets = qs_sets(&pts, 0.0);
+    assert_eq!(sets.len(), 6);
+    for (nu, set) in &sets {
+        let phis: Vec<f64> = set.iter().map(|p| p.0).collect();
+        assert_eq!(phis, vec![0.7, 0.75, 0.8, 0.85, 0.9], "ν = {nu}");
+    }
+    let j = jamming(&pts, 0.0);
+    let a = j.rate.and_then(Crossing::at).unwrap();
+    assert!(a > 0.65 && a < 0.7, "route (a) {a}");
+    let (b, _, _, _) = j.extrap.unwrap();
+    assert!(b < a, "route (b) {b} vs (a) {a}");
 }
 
 /// The dense frictional reproducer of docs/shear.md ("Runs that stop"): 64 spheres at φ = 0.9,

@@ -112,6 +112,9 @@ pub struct Options {
     pub threads: usize,
     /// Measure cost vs N only: no grid run is started (finished ones are still reported).
     pub cost_only: bool,
+    /// Rewrite the outputs from the finished runs on disk and the cached cost rows: no run and no
+    /// cost measurement is started.
+    pub report_only: bool,
 }
 
 /// Cost-vs-N measurement.

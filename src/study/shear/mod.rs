@@ -14,10 +14,12 @@
 //! `DIR/report.md`.
 //!
 //! Files: `protocol` (one run), `grid` (the grid and its options), `runs` (the grid's runs),
-//! `paper` (Tables D.1/D.2),
+//! `paper` (Tables D.1/D.2), `jamming` (φ_c from the rate data, the quasi-static set per μ),
 //! `surface` (the Eq. 8 fit over the grid), `report` (CSV, plots, report).
 
 mod grid;
+mod jamming;
+mod jamming_report;
 mod paper;
 mod protocol;
 mod report;
@@ -25,6 +27,10 @@ mod runs;
 mod surface;
 
 pub use grid::{CostRow, Grid, Options};
+pub use jamming::{
+    crossing, data_fit, jamming, linearised_phi_c, qs_phis, qs_sets, Crossing, DataFit, Jamming, RatePoint,
+    N_CROSS,
+};
 pub use paper::{paper_values, PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 pub use protocol::{
     classify, k_n, run_one, run_refined, time_step, time_unit, Protocol, RunResult, RunSpec, Stop, DENSITY,
@@ -32,4 +38,4 @@ pub use protocol::{
     YOUNGS_MODULUS,
 };
 pub use runs::{run, Summary};
-pub use surface::{phi_c_floor, response_surface, SurfaceRow};
+pub use surface::{jamming_of, phi_c_floor, response_surface, SurfaceRow};

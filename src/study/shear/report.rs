@@ -4,12 +4,14 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use super::grid::{law_text, write_atomic, CostRow, Options};
+use super::jamming::{key3, Jamming};
+use super::jamming_report::{jamming_section, rate_exponent_chart};
 use super::paper::{PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 use super::protocol::{
     RunResult, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START,
     YOUNGS_MODULUS,
 };
-use super::surface::{key3, qs_points, SurfaceRow};
+use super::surface::{qs_points, SurfaceRow};
 use crate::harness::plot::{self, Chart, Series};
 
 pub(super) fn f(x: f64) -> String {
@@ -34,6 +36,7 @@ pub(super) fn write_outputs(
     failed: &[(String, String)],
     surface: &[SurfaceRow],
     phi_c: &BTreeMap<String, (f64, f64)>,
+    jam: &[Jamming],
     cost: &[CostRow],
 ) -> Result<(), String> {
     let out = &opts.out;
@@ -82,11 +85,13 @@ pub(super) fn write_outputs(
         w("runs.csv", &csv)?;
         w("stops.csv", &stops_csv(results, failed))?;
     }
-    let mut rs = String::from("mu,nu,phi_c,alpha,beta,alpha_paper,beta_paper,points,rms_log\n");
+    let mut rs = String::from(
+        "mu,nu,phi_c,alpha,beta,alpha_paper,beta_paper,points,rms_log,phi_c_data,alpha_data,beta_data,beta_data_min,beta_data_max\n",
+    );
     for r in surface {
         let _ = writeln!(
             rs,
-            "{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.mu,
             r.nu,
             f(r.phi_c),
@@ -95,7 +100,12 @@ pub(super) fn write_outputs(
             f(r.alpha_paper),
             f(r.beta_paper),
             r.points,
-            f(r.rms_log)
+            f(r.rms_log),
+            f(r.phi_c_data),
+            f(r.alpha_data),
+            f(r.beta_data),
+            f(r.beta_data_min),
+            f(r.beta_data_max)
         );
     }
     if grid_ran {
@@ -113,8 +123,12 @@ pub(super) fn write_outputs(
     if !cost.is_empty() {
         w("cost.csv", &cs)?;
     }
-    let plots = plots(opts, results, surface, cost)?;
-    w("report.md", &report(opts, results, failed, surface, phi_c, cost, &plots))
+    let mut plots = plots(opts, results, surface, cost)?;
+    if let Some(chart_name) = rate_exponent_chart(opts, results)? {
+        plots.push(chart_name);
+    }
+    let fits = Fits { surface, phi_c, jam };
+    w("report.md", &report(opts, results, failed, &fits, cost, &plots))
 }
 
 pub(super) fn plots(
@@ -295,15 +309,23 @@ pub(super) fn plots(
     Ok(names)
 }
 
+/// The fits the report states: Eq. 8 per (μ, ν), the free φ_c per μ (with the lower end of its
+/// search), and φ_c from the rate data per μ.
+pub(super) struct Fits<'a> {
+    pub surface: &'a [SurfaceRow],
+    pub phi_c: &'a BTreeMap<String, (f64, f64)>,
+    pub jam: &'a [Jamming],
+}
+
 pub(super) fn report(
     opts: &Options,
     results: &[RunResult],
     failed: &[(String, String)],
-    surface: &[SurfaceRow],
-    phi_c: &BTreeMap<String, (f64, f64)>,
+    fits: &Fits,
     cost: &[CostRow],
     plots: &[String],
 ) -> String {
+    let Fits { surface, phi_c, jam } = *fits;
     let g = &opts.grid;
     let p = &g.protocol;
     let mut s = String::new();
@@ -368,7 +390,10 @@ pub(super) fn report(
         let _ = writeln!(
             s,
             "A (μ, ν, φ) point is quasi-static when p̂ grows slower than γ̂^0.5 between the two slowest rates \
-             (one rate only: p̂/γ̂² > 10³); its slowest-rate p̂ enters the fit. φ_c is shared by all ν of one μ.\n"
+             (one rate only: p̂/γ̂² > 10³); a φ enters the fit of every ν of its μ when it is quasi-static for \
+             more than half of the ν that ran there, so all ν of one μ are fitted over the same φ (a ν misses \
+             only the φ where its run stopped). The slowest-rate p̂ enters the fit. The free fit's φ_c is shared \
+             by all ν of one μ.\n"
         );
         let _ = writeln!(
             s,
@@ -399,6 +424,7 @@ pub(super) fn report(
                 r.rms_log
             );
         }
+        s.push_str(&jamming_section(surface, jam));
         let _ = writeln!(s, "\n## Runs\n");
         let _ = writeln!(
             s,

@@ -7,9 +7,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use super::grid::{read_json, single_thread, write_atomic, CostRow, Options};
+use super::jamming::Jamming;
 use super::protocol::{prepare_sorted, run_one, start_shear, time_unit, RunResult, RunSpec};
 use super::report::write_outputs;
-use super::surface::{response_surface, SurfaceRow};
+use super::surface::{jamming_of, response_surface, SurfaceRow};
 use crate::harness::progress::Progress;
 
 /// What a study call did.
@@ -22,6 +23,8 @@ pub struct Summary {
     pub surface: Vec<SurfaceRow>,
     /// Per μ: fitted φ_c and the lower end of its search interval.
     pub phi_c: BTreeMap<String, (f64, f64)>,
+    /// Per μ: φ_c from the rate data by both routes (`jamming`).
+    pub jamming: Vec<Jamming>,
     pub cost: Vec<CostRow>,
 }
 
@@ -46,7 +49,7 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
             _ => todo.push(s),
         }
     }
-    if opts.cost_only {
+    if opts.cost_only || opts.report_only {
         todo.clear();
     }
     let skipped = done.len() + failed.len();
@@ -113,8 +116,9 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
     });
     let cost = cost_rows(opts, say)?;
     let (surface, phi_c) = response_surface(&opts.grid, &done);
-    write_outputs(opts, &done, &failed, &surface, &phi_c, &cost)?;
-    Ok(Summary { ran, skipped, failed, results: done, surface, phi_c, cost })
+    let jamming = jamming_of(&opts.grid, &done);
+    write_outputs(opts, &done, &failed, &surface, &phi_c, &jamming, &cost)?;
+    Ok(Summary { ran, skipped, failed, results: done, surface, phi_c, jamming, cost })
 }
 
 /// Stores a finished run (JSON) and reports it.
@@ -170,6 +174,10 @@ pub(super) fn cost_rows(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<V
         let path = dir.join(format!("n{n}_steps{}.json", g.cost_steps));
         if let Some(r) = read_json::<CostRow>(&path) {
             rows.push(r);
+            continue;
+        }
+        if opts.report_only {
+            // Report only: what was measured before, nothing new.
             continue;
         }
         let spec = RunSpec { phi, mu, nu, gamma_hat, n, gamma_mc, mpr, restitution: g.restitution, seed: 7 };

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::grid::Grid;
+use super::jamming::{data_fit, jamming, key3, qs_sets, rate_exponent, Jamming, RatePoint};
 use super::paper::paper_values;
 use super::protocol::RunResult;
 use crate::study::fit;
@@ -24,64 +25,62 @@ pub struct SurfaceRow {
     pub points: usize,
     /// RMS of the log residuals.
     pub rms_log: f64,
-}
-
-/// Is a (μ, ν, φ) point quasi-static? With two or more shear rates: the pressure grows slower
-/// than γ̂^0.5 between the two slowest (inertial flow gives γ̂²). With one rate: the inertial
-/// number test p̂/γ̂² = p/(ρ d² γ̇²) > 10³.
-pub(super) fn quasi_static(runs: &[&RunResult]) -> Option<f64> {
-    let mut rs: Vec<&&RunResult> = runs.iter().collect();
-    rs.sort_by(|a, b| a.spec.gamma_hat.total_cmp(&b.spec.gamma_hat));
-    let slow = rs.first()?;
-    let qs = if let Some(s) = rate_exponent(runs) {
-        s < 0.5
-    } else {
-        slow.p_hat / slow.spec.gamma_hat.powi(2) > 1e3
-    };
-    (qs && slow.p_hat > 0.0).then_some(slow.p_hat)
-}
-
-/// d ln p̂ / d ln γ̂ between the two slowest rates of one (μ, ν, φ) point (None with one rate).
-pub(super) fn rate_exponent(runs: &[&RunResult]) -> Option<f64> {
-    let mut rs: Vec<&&RunResult> = runs.iter().collect();
-    rs.sort_by(|a, b| a.spec.gamma_hat.total_cmp(&b.spec.gamma_hat));
-    let (slow, fast) = (rs.first()?, rs.get(1)?);
-    Some((fast.p_hat / slow.p_hat).ln() / (fast.spec.gamma_hat / slow.spec.gamma_hat).ln())
+    /// Eq. 8 at φ_c from the rate data (`jamming::Jamming::data`): that φ_c, α, β, and the range
+    /// of β over φ_c ± its error bar (NaN where there is no such φ_c or fewer than three points).
+    pub phi_c_data: f64,
+    pub alpha_data: f64,
+    pub beta_data: f64,
+    pub beta_data_min: f64,
+    pub beta_data_max: f64,
 }
 
 /// Lower end of the φ_c search for one μ: the densest φ (any ν) that is clearly inertial
 /// (p̂ ∝ γ̂^s with s ≥ 1.5 between the two slowest rates); 0.5 when there is none.
 pub fn phi_c_floor(results: &[RunResult], mu: f64) -> f64 {
-    let mut groups: BTreeMap<(i64, i64), Vec<&RunResult>> = BTreeMap::new();
-    for r in results.iter().filter(|r| key3(r.spec.mu) == key3(mu)) {
-        groups.entry((key3(r.spec.nu), key3(r.spec.phi))).or_default().push(r);
+    let pts: Vec<RatePoint> = results.iter().map(RatePoint::of).collect();
+    rate_curve_all(&pts, mu).into_iter().filter(|p| p.1 >= 1.5).map(|p| p.0).fold(0.5, f64::max)
+}
+
+/// (φ, n) of every (ν, φ) of one μ between the two slowest rates.
+fn rate_curve_all(pts: &[RatePoint], mu: f64) -> Vec<(f64, f64)> {
+    let mut g: BTreeMap<(i64, i64), Vec<RatePoint>> = BTreeMap::new();
+    for p in pts.iter().filter(|p| key3(p.mu) == key3(mu)) {
+        g.entry((key3(p.nu), key3(p.phi))).or_default().push(*p);
     }
-    groups
-        .values()
-        .filter(|runs| rate_exponent(runs).is_some_and(|s| s >= 1.5))
-        .map(|runs| runs[0].spec.phi)
-        .fold(0.5, f64::max)
+    g.values_mut()
+        .filter_map(|v| {
+            v.sort_by(|a, b| a.gamma_hat.total_cmp(&b.gamma_hat));
+            rate_exponent(v, 0).map(|n| (v[0].phi, n))
+        })
+        .collect()
 }
 
 pub(super) type PointMap = BTreeMap<(i64, i64), Vec<(f64, f64)>>;
 
-pub(super) fn key3(x: f64) -> i64 {
-    (x * 1000.0).round() as i64
-}
-
-/// Quasi-static points above jamming per (μ, ν): (φ, p̂ at the slowest rate).
+/// Quasi-static points above jamming per (μ, ν): (φ, p̂ at the slowest rate), over the one set of
+/// φ per μ that passes the quasi-static test for the majority of ν (`jamming::qs_phis`).
 pub(super) fn qs_points(results: &[RunResult]) -> PointMap {
-    let mut groups: BTreeMap<(i64, i64, i64), Vec<&RunResult>> = BTreeMap::new();
-    for r in results {
-        groups.entry((key3(r.spec.mu), key3(r.spec.nu), key3(r.spec.phi))).or_default().push(r);
-    }
-    let mut pts: PointMap = BTreeMap::new();
-    for ((mu, nu, _), runs) in groups {
-        if let Some(p) = quasi_static(&runs) {
-            pts.entry((mu, nu)).or_default().push((runs[0].spec.phi, p));
+    let pts: Vec<RatePoint> = results.iter().map(RatePoint::of).collect();
+    let mus: std::collections::BTreeSet<i64> = pts.iter().map(|p| key3(p.mu)).collect();
+    let mut out: PointMap = BTreeMap::new();
+    for mu in mus {
+        for (nu, set) in qs_sets(&pts, mu as f64 / 1000.0) {
+            if !set.is_empty() {
+                out.insert((mu, key3(nu)), set);
+            }
         }
     }
-    pts
+    out
+}
+
+/// φ_c of every μ of the grid from its rate data (`jamming`).
+pub fn jamming_of(grid: &Grid, results: &[RunResult]) -> Vec<Jamming> {
+    let pts: Vec<RatePoint> = results.iter().map(RatePoint::of).collect();
+    grid.mus
+        .iter()
+        .filter(|&&mu| pts.iter().any(|p| key3(p.mu) == key3(mu)))
+        .map(|&mu| jamming(&pts, mu))
+        .collect()
 }
 
 /// Eq. 8 per (μ, ν), φ_c shared by all ν of one μ.
@@ -90,6 +89,7 @@ pub fn response_surface(
     results: &[RunResult],
 ) -> (Vec<SurfaceRow>, BTreeMap<String, (f64, f64)>) {
     let pts = qs_points(results);
+    let jam = jamming_of(grid, results);
     // (μ, ν) with at least one finished run: a sub-grid study leaves the others without a row
     // (their stopped runs are listed in the report; a (μ, ν) with finished runs but no
     // quasi-static point still gets its row, with 0 points).
@@ -124,7 +124,19 @@ pub fn response_surface(
                 beta_paper: b_p,
                 points: set.len(),
                 rms_log: f64::NAN,
+                phi_c_data: f64::NAN,
+                alpha_data: f64::NAN,
+                beta_data: f64::NAN,
+                beta_data_min: f64::NAN,
+                beta_data_max: f64::NAN,
             };
+            if let Some((pc, err, _)) = jam.iter().find(|j| key3(j.mu) == key3(mu)).and_then(|j| j.data) {
+                row.phi_c_data = pc;
+                if let Some(d) = data_fit(set, pc, err) {
+                    (row.alpha_data, row.beta_data, row.beta_data_min, row.beta_data_max) =
+                        (d.alpha, d.beta, d.beta_min, d.beta_max);
+                }
+            }
             if let Some((pc, fits)) = &fitted {
                 if let Some(k) = usable.iter().position(|u| u.0 == *nu) {
                     row.phi_c = *pc;
