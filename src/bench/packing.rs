@@ -58,11 +58,8 @@ pub fn scene(k: usize, advanced: bool) -> Result<World, String> {
     }
     w.skin = 0.05 * d;
     w.integrate = true;
-    let mut seed = 0x9e3779b97f4a7c15u64;
-    let mut rnd = move || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
+    let mut rng = crate::rng::Lcg64(0x9e3779b97f4a7c15);
+    let mut rnd = move || rng.symmetric();
     let basis = [[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]];
     let mut id = 1;
     for i in 0..k {

@@ -41,11 +41,8 @@ fn lattice(dir: &std::path::Path, n: usize, a: f64, d: f64, jitter: f64) {
     // Pseudo-random vy, vz of amplitude `jitter` m/s with zero mean: collisions between the
     // sliding lattice rows (vx comes from the velocity ramp).
     let nat = n * n * n;
-    let mut st: u64 = 12345;
-    let mut rnd = || {
-        st = st.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (st >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = mcdem::rng::Lcg64(12345);
+    let mut rnd = || rng.uniform() - 0.5;
     let v: Vec<(f64, f64)> = (0..nat).map(|_| (rnd() * jitter, rnd() * jitter)).collect();
     let (my, mz) = v.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0 / nat as f64, a.1 + b.1 / nat as f64));
     s += "\nVelocities\n\n";
@@ -168,11 +165,8 @@ fn fcc(dir: &std::path::Path, nc: usize, phi: f64, d: f64) -> f64 {
     let n = 4 * nc * nc * nc;
     let l = (n as f64 * std::f64::consts::PI * d.powi(3) / 6.0 / phi).cbrt();
     let a = l / nc as f64;
-    let mut st: u64 = 99;
-    let mut rnd = || {
-        st = st.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        0.2 * ((st >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
-    };
+    let mut rng = mcdem::rng::Lcg64(99);
+    let mut rnd = || 0.2 * (rng.uniform() - 0.5);
     let mut s =
         format!("fcc\n\n{n} atoms\n1 atom types\n0 {l} xlo xhi\n0 {l} ylo yhi\n0 {l} zlo zhi\n\nAtoms\n\n");
     let mut id = 1;

@@ -593,7 +593,7 @@ impl Deck {
         };
         let n = want.round().max(0.0) as usize;
         // Round 0 keeps the streams of a single insertion; later rounds draw new ones.
-        let seed = pack.seed.wrapping_add(pack.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let seed = crate::rng::mix_seed(pack.seed, pack.round);
         let (templates, new) = self.draw_batch(&pack.dist, n, seed, pack.exact);
         let mut grid = self.occupied(&new);
         let p = &self.world.p;

@@ -377,7 +377,7 @@ impl Deck {
         };
         let per = nrate * g.every as f64 * self.world.dt;
         // Round 0 keeps the streams of a single insertion; later rounds draw new ones.
-        let seed = s.seed.wrapping_add(s.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let seed = crate::rng::mix_seed(s.seed, s.round);
         let mut rng = SplitMix64(seed);
         let mut n = (per + rng.uniform()) as usize;
         let left = match s.total {
