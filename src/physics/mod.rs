@@ -26,6 +26,7 @@ pub mod hooke;
 pub mod hooke_hysteresis;
 pub mod lanes;
 pub mod material;
+pub mod model_kind;
 pub mod pair;
 pub mod rolling_cdt;
 pub mod sjkr;
