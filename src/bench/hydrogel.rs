@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use super::{Options, Report, Row};
-use crate::outputs::loop_totals;
+use crate::outputs::{loop_totals, read_ave_time};
 use crate::physics::model_kind::{ModelKind, ModelLabel};
 
 pub const SCENE: &str = "hydrogel_514";
@@ -49,17 +49,16 @@ fn measure_force(cmd: &mut Command, what: &str) -> Result<(f64, f64, Vec<f64>), 
     std::fs::create_dir_all(&work).map_err(|e| e.to_string())?;
     let out = cmd.current_dir(&work).output().map_err(|e| format!("{what}: cannot start: {e}"))?;
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    let force: Vec<f64> = std::fs::read_to_string(work.join("piston_force.txt"))
-        .unwrap_or_default()
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .filter_map(|l| l.split_whitespace().nth(3)?.parse().ok())
-        .collect();
+    let table = read_ave_time(&work.join("piston_force.txt"));
     let _ = std::fs::remove_dir_all(&work);
     if !out.status.success() {
         let tail: Vec<&str> = text.lines().rev().take(5).collect();
         return Err(format!("{what} failed: {}", tail.join(" | ")));
     }
+    let force = table?
+        .iter()
+        .map(|r| r.get(3).copied().ok_or_else(|| format!("{what}: piston_force.txt has no 4th column")))
+        .collect::<Result<Vec<f64>, String>>()?;
     let lt = loop_totals(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
     Ok((lt.seconds, lt.rate(), force))
 }

@@ -119,13 +119,7 @@ fn lees_edwards_streaming_profile_and_momentum() {
             0.5 * rate * l
         );
     let _ = run(dir.path(), &deck);
-    let text = std::fs::read_to_string(dir.path().join("dump.sh")).unwrap();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
-        .skip(1)
-        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap()).collect())
-        .collect();
+    let rows = mcdem::outputs::read_dump(&dir.path().join("dump.sh")).unwrap().pop().unwrap().rows;
     assert_eq!(rows.len(), n * n * n);
     // Momentum: the peculiar momentum Σ m (v − u(y)) is what Lees–Edwards conserves (a particle
     // crossing the sheared boundary changes v_x and u_x by the same jump); it starts at zero.
@@ -358,13 +352,7 @@ fn dense_shear(nc: usize, steps: u64, extra: &str, mode: &str, pool: &str) -> (V
         .unwrap();
     let out = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{out}");
-    let text = std::fs::read_to_string(dir.path().join("dump.sh")).unwrap();
-    let mut rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
-        .skip(1)
-        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap()).collect())
-        .collect();
+    let mut rows = mcdem::outputs::read_dump(&dir.path().join("dump.sh")).unwrap().pop().unwrap().rows;
     rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
     assert_eq!(rows.len(), 4 * nc * nc * nc);
     (rows, out)
@@ -382,13 +370,7 @@ fn coordination(out: &str) -> Vec<(u64, f64)> {
 
 /// Neighbour builds of a run's `Loop time` lines.
 fn builds(out: &str) -> u64 {
-    out.lines()
-        .filter(|l| l.starts_with("Loop time of"))
-        .map(|l| {
-            let (head, _) = l.split_once(" neighbour builds").unwrap();
-            head.rsplit_once(' ').unwrap().1.parse::<u64>().unwrap()
-        })
-        .sum()
+    mcdem::outputs::loop_details(out).unwrap().iter().map(|d| d.neighbour_builds).sum()
 }
 
 /// The Lees–Edwards skin test (rebuild when relative motion plus the sheared-image drift could
