@@ -70,11 +70,8 @@ pub fn boussinesq_projected(nk: &Vec3, nc: &Vec3, chord: &Vec3, nu: f64) -> f64 
 
 fn boussinesq_identity() -> Check {
     // Deterministic pseudo-random geometries (a fixed LCG keeps the check reproducible).
-    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut next = || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((state >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
-    };
+    let mut rng = crate::rng::Lcg64(0x9E37_79B9_7F4A_7C15);
+    let mut next = || rng.symmetric();
     let mut worst: f64 = 0.0;
     for _ in 0..2000 {
         let nk = Vec3::new(next(), next(), next()).normalize();

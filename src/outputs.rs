@@ -1,4 +1,5 @@
-//! Readers of LIGGGHTS text outputs (`dump custom`, `dump local`, `fix ave/time ... file`), shared
+//! Readers of LIGGGHTS text outputs (`dump custom`, `dump local`, `fix ave/time ... file`, the
+//! `Loop time` lines of a log and the details mcdem adds to them), shared
 //! by the validation harness and the tests of both engines so that every comparison reads files the
 //! same way. LIGGGHTS writes runs of spaces, a trailing space and many frames per file; malformed
 //! input is an error naming the file and line, never a silently short table.
@@ -142,6 +143,55 @@ pub fn loop_totals(text: &str) -> Option<LoopTotals> {
     (t.steps > 0).then_some(t)
 }
 
+/// What `mcdem run` adds in parentheses to each `Loop time` line (written by `src/deck/run.rs`):
+/// the thread count, the share of threaded steps, the neighbour builds and, with
+/// `--mc-update-every`, the full multi-contact passes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopDetails {
+    /// `1 thread` or `T threads`.
+    pub threads: u64,
+    /// `threaded in P % of steps`, printed when the force passes had more than one thread.
+    pub threaded_percent: Option<f64>,
+    /// `N neighbour builds`.
+    pub neighbour_builds: u64,
+    /// `full pass in K of N steps`, printed with `--mc-update-every` > 1.
+    pub full_passes: Option<u64>,
+}
+
+/// The details of every `Loop time of` line of an mcdem log, in order; an error naming the line
+/// when one lacks them (a LIGGGHTS log, or a layout this reader does not know).
+pub fn loop_details(text: &str) -> Result<Vec<LoopDetails>, String> {
+    let word_before = |l: &str, tag: &str| -> Option<u64> {
+        let (head, _) = l.split_once(tag)?;
+        head.rsplit([' ', '(']).next()?.parse().ok()
+    };
+    let word_after = |l: &str, tag: &str| -> Option<String> {
+        let (_, rest) = l.split_once(tag)?;
+        rest.split(' ').next().map(str::to_string)
+    };
+    text.lines()
+        .filter(|l| l.starts_with("Loop time of"))
+        .map(|l| {
+            let bad = || format!("no mcdem details in '{l}'");
+            let threads = word_before(l, " thread").ok_or_else(bad)?;
+            let threaded_percent = match word_after(l, "threaded in ") {
+                Some(p) => Some(p.parse::<f64>().map_err(|_| bad())?),
+                None => None,
+            };
+            let full_passes = match word_after(l, "full pass in ") {
+                Some(k) => Some(k.parse::<u64>().map_err(|_| bad())?),
+                None => None,
+            };
+            Ok(LoopDetails {
+                threads,
+                threaded_percent,
+                neighbour_builds: word_before(l, " neighbour builds").ok_or_else(bad)?,
+                full_passes,
+            })
+        })
+        .collect()
+}
+
 /// Normalised root-mean-square error of `model` against `reference` (paired samples):
 /// RMSE / mean(|reference|), the paper's NRMSE (Sect. 3, Fig. 4).
 pub fn nrmse(model: &[f64], reference: &[f64]) -> f64 {
@@ -195,5 +245,27 @@ mod tests {
         assert_eq!(t.rate(), 914_000.0 / 3.0);
         assert_eq!(loop_totals("nothing"), None);
         assert_eq!(loop_totals("Loop time of 1 on 1 procs for x steps with 5 atoms"), None);
+    }
+
+    #[test]
+    fn mcdem_loop_details() {
+        let text = "Loop time of 0.5 on 1 procs for 1000 steps with 400 atoms (1e6 particle-steps/s, 1 thread, 3 neighbour builds)\n\
+                    Loop time of 0.5 on 1 procs for 1000 steps with 400 atoms (1e6 particle-steps/s, 2 threads, threaded in 87 % of steps, 12 neighbour builds, multi-contact update every 10 steps: full pass in 104 of 1000 steps)\n";
+        let d = loop_details(text).unwrap();
+        assert_eq!(
+            d[0],
+            LoopDetails { threads: 1, threaded_percent: None, neighbour_builds: 3, full_passes: None }
+        );
+        assert_eq!(
+            d[1],
+            LoopDetails {
+                threads: 2,
+                threaded_percent: Some(87.0),
+                neighbour_builds: 12,
+                full_passes: Some(104)
+            }
+        );
+        let liggghts = "Loop time of 2.5 on 1 procs for 1000 steps with 514 atoms";
+        assert!(loop_details(liggghts).unwrap_err().starts_with("no mcdem details in 'Loop time of 2.5"));
     }
 }

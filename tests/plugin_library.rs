@@ -15,13 +15,7 @@ fn decks() -> PathBuf {
 
 /// Last frame of a `dump custom` file as rows of numbers (id first).
 fn last_frame(path: &Path) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let start = text.rfind("ITEM: ATOMS").expect("a frame");
-    text[start..]
-        .lines()
-        .skip(1)
-        .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
-        .collect()
+    mcdem::outputs::read_dump(path).unwrap().pop().expect("a frame").rows
 }
 
 #[test]

@@ -8,14 +8,16 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use super::{Options, Report, Row};
-use crate::outputs::loop_totals;
+use crate::outputs::{loop_totals, read_ave_time};
+use crate::physics::model_kind::{ModelKind, ModelLabel};
 
 pub const SCENE: &str = "hydrogel_514";
 
 const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
 
 /// (law variable, model name) as in `liggghts_inputs/select_law.inc`.
-const LAWS: [(&str, &str); 3] = [("1", "hertz"), ("2", "standard_mc"), ("0", "mc_advanced")];
+const LAWS: [(&str, ModelKind); 3] =
+    [("1", ModelKind::Hertz), ("2", ModelKind::StandardMc), ("0", ModelKind::McAdvanced)];
 
 pub(super) fn sibling(name: &str) -> Option<PathBuf> {
     let p = std::env::current_exe().ok()?.with_file_name(name);
@@ -47,17 +49,16 @@ fn measure_force(cmd: &mut Command, what: &str) -> Result<(f64, f64, Vec<f64>), 
     std::fs::create_dir_all(&work).map_err(|e| e.to_string())?;
     let out = cmd.current_dir(&work).output().map_err(|e| format!("{what}: cannot start: {e}"))?;
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    let force: Vec<f64> = std::fs::read_to_string(work.join("piston_force.txt"))
-        .unwrap_or_default()
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .filter_map(|l| l.split_whitespace().nth(3)?.parse().ok())
-        .collect();
+    let table = read_ave_time(&work.join("piston_force.txt"));
     let _ = std::fs::remove_dir_all(&work);
     if !out.status.success() {
         let tail: Vec<&str> = text.lines().rev().take(5).collect();
         return Err(format!("{what} failed: {}", tail.join(" | ")));
     }
+    let force = table?
+        .iter()
+        .map(|r| r.get(3).copied().ok_or_else(|| format!("{what}: piston_force.txt has no 4th column")))
+        .collect::<Result<Vec<f64>, String>>()?;
     let lt = loop_totals(&text).ok_or_else(|| format!("{what}: no 'Loop time' line"))?;
     Ok((lt.seconds, lt.rate(), force))
 }
@@ -90,7 +91,7 @@ fn in_round(round: usize, tol: f64, every: u64) -> bool {
 /// The model name of an approximate row: `mc_advanced tol=1e-3`, `mc_advanced every=10`,
 /// `mc_advanced tol=1e-3 every=5`.
 pub fn approximate_model(tol: f64, every: u64) -> String {
-    let mut m = "mc_advanced".to_string();
+    let mut m = ModelKind::McAdvanced.name().to_string();
     if tol > 0.0 {
         m += &format!(" tol={tol:e}");
     }
@@ -153,7 +154,7 @@ pub fn rows(
             for (law, model) in LAWS {
                 let exe = if law == "0" { plugin.as_ref() } else { stock.as_ref() };
                 let Some(exe) = exe else { continue };
-                if model == "standard_mc" && round > 0 {
+                if model == ModelKind::StandardMc && round > 0 {
                     continue;
                 }
                 let mut c = Command::new(exe);
@@ -183,7 +184,7 @@ pub fn rows(
                     deck_args(&mut c, "1", None);
                     let (t, rate, _) = measure_force(&mut c, "liggghts hertz, 2 ranks")?;
                     say(&format!("hydrogel, liggghts hertz, 2 ranks: {rate:.3e} particle-steps/s"));
-                    push(report, "liggghts", "hertz", 2, (t, rate));
+                    push(report, "liggghts", ModelKind::Hertz, 2, (t, rate));
                 }
                 if let (Some(exe), 0) = (&plugin, round) {
                     let (tol, every) = TARGET_APPROXIMATION;
@@ -212,10 +213,12 @@ pub fn rows(
     };
     for (law, model) in LAWS {
         for threads in [1usize, 2] {
-            if round > 0 && (model == "standard_mc" || (model == "mc_advanced" && threads == 2)) {
+            if round > 0
+                && (model == ModelKind::StandardMc || (model == ModelKind::McAdvanced && threads == 2))
+            {
                 continue;
             }
-            let (t, rate, force) = rust(law, threads, (0.0, 1), model)?;
+            let (t, rate, force) = rust(law, threads, (0.0, 1), model.name())?;
             say(&format!("hydrogel, rust {model}, {threads} thread(s): {rate:.3e} particle-steps/s"));
             push(report, "rust", model, threads, (t, rate));
             if law == "0" && threads == 1 {
@@ -232,7 +235,13 @@ pub fn rows(
 }
 
 /// One row of this scene.
-fn push(report: &mut Report, engine: &'static str, model: &str, threads: usize, (secs, rate): (f64, f64)) {
+fn push(
+    report: &mut Report,
+    engine: &'static str,
+    model: impl Into<ModelLabel>,
+    threads: usize,
+    (secs, rate): (f64, f64),
+) {
     report.rows.push(Row {
         engine,
         model: model.into(),

@@ -23,14 +23,16 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::harness::progress::Progress;
+use crate::physics::model_kind::{ModelKind, ModelLabel};
 
 /// One measurement.
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
     /// `rust` or `liggghts`.
     pub engine: &'static str,
-    /// `hertz`, `standard_mc` (γ only), `mc_advanced` (γ and MPR), or a kernel variant.
-    pub model: String,
+    /// `hertz`, `standard_mc` (γ only), `mc_advanced` (γ and MPR), or a variant's own label (an
+    /// approximation, a kernel variant).
+    pub model: ModelLabel,
     pub scene: String,
     /// Particles in the scene (contacts per particle for kernel rows).
     pub n: usize,
@@ -230,7 +232,7 @@ fn targets(r: &Report) -> Vec<Target> {
     let (tol, every) = hydrogel::TARGET_APPROXIMATION;
     let fast = hydrogel::approximate_model(tol, every);
     for (label, engine) in [("rust 1 thread", "rust"), ("liggghts", "liggghts")] {
-        for m in ["mc_advanced", fast.as_str()] {
+        for m in [ModelKind::McAdvanced.name(), fast.as_str()] {
             if let Some(&v) = r.ratios.get(&format!("{label}: {m} / hertz")) {
                 push(format!("hydrogel, {engine}: cost {m} / hertz"), v, "<=", 1.3);
             }
@@ -270,7 +272,14 @@ fn targets(r: &Report) -> Vec<Target> {
     t
 }
 
-fn find<'a>(r: &'a Report, engine: &str, model: &str, scene: &str, threads: usize) -> Option<&'a Row> {
+fn find<'a>(
+    r: &'a Report,
+    engine: &str,
+    model: impl Into<ModelLabel>,
+    scene: &str,
+    threads: usize,
+) -> Option<&'a Row> {
+    let model = model.into();
     r.rows.iter().find(|x| x.engine == engine && x.model == model && x.scene == scene && x.threads == threads)
 }
 
@@ -282,17 +291,18 @@ fn ratios(r: &mut Report) {
         (Some(a), Some(b)) => Some(b.particle_steps_per_s / a.particle_steps_per_s),
         _ => None,
     };
+    let (hertz, standard, advanced) = (ModelKind::Hertz, ModelKind::StandardMc, ModelKind::McAdvanced);
     let pairs = [
-        ("liggghts: mc_advanced / hertz", ("liggghts", "mc_advanced", 1), ("liggghts", "hertz", 1)),
-        ("liggghts: standard_mc / hertz", ("liggghts", "standard_mc", 1), ("liggghts", "hertz", 1)),
-        ("rust 1 thread: mc_advanced / hertz", ("rust", "mc_advanced", 1), ("rust", "hertz", 1)),
-        ("rust 1 thread: standard_mc / hertz", ("rust", "standard_mc", 1), ("rust", "hertz", 1)),
-        ("hertz: rust 1 thread / liggghts", ("rust", "hertz", 1), ("liggghts", "hertz", 1)),
-        ("hertz: rust 2 threads / liggghts", ("rust", "hertz", 2), ("liggghts", "hertz", 1)),
-        ("hertz: rust 2 threads / liggghts 2 ranks", ("rust", "hertz", 2), ("liggghts", "hertz", 2)),
-        ("liggghts: hertz 2 ranks / 1 rank", ("liggghts", "hertz", 2), ("liggghts", "hertz", 1)),
-        ("rust: hertz 2 threads / 1 thread", ("rust", "hertz", 2), ("rust", "hertz", 1)),
-        ("mc_advanced: rust 1 thread / liggghts", ("rust", "mc_advanced", 1), ("liggghts", "mc_advanced", 1)),
+        ("liggghts: mc_advanced / hertz", ("liggghts", advanced, 1), ("liggghts", hertz, 1)),
+        ("liggghts: standard_mc / hertz", ("liggghts", standard, 1), ("liggghts", hertz, 1)),
+        ("rust 1 thread: mc_advanced / hertz", ("rust", advanced, 1), ("rust", hertz, 1)),
+        ("rust 1 thread: standard_mc / hertz", ("rust", standard, 1), ("rust", hertz, 1)),
+        ("hertz: rust 1 thread / liggghts", ("rust", hertz, 1), ("liggghts", hertz, 1)),
+        ("hertz: rust 2 threads / liggghts", ("rust", hertz, 2), ("liggghts", hertz, 1)),
+        ("hertz: rust 2 threads / liggghts 2 ranks", ("rust", hertz, 2), ("liggghts", hertz, 2)),
+        ("liggghts: hertz 2 ranks / 1 rank", ("liggghts", hertz, 2), ("liggghts", hertz, 1)),
+        ("rust: hertz 2 threads / 1 thread", ("rust", hertz, 2), ("rust", hertz, 1)),
+        ("mc_advanced: rust 1 thread / liggghts", ("rust", advanced, 1), ("liggghts", advanced, 1)),
     ];
     for (name, (e1, m1, t1), (e2, m2, t2)) in pairs {
         if let Some(v) = cost(find(r, e1, m1, h, t1), find(r, e2, m2, h, t2)) {
@@ -302,11 +312,14 @@ fn ratios(r: &mut Report) {
     for (tol, every, _) in hydrogel::APPROXIMATIONS {
         let m = hydrogel::approximate_model(tol, every);
         for (engine, label) in [("rust", "rust 1 thread"), ("liggghts", "liggghts")] {
-            if let Some(v) = cost(find(r, engine, &m, h, 1), find(r, engine, "hertz", h, 1)) {
+            if let Some(v) = cost(find(r, engine, m.as_str(), h, 1), find(r, engine, ModelKind::Hertz, h, 1))
+            {
                 out.insert(format!("{label}: {m} / hertz"), v);
             }
         }
-        if let Some(v) = cost(find(r, "liggghts", &m, h, 2), find(r, "liggghts", "hertz", h, 2)) {
+        if let Some(v) =
+            cost(find(r, "liggghts", m.as_str(), h, 2), find(r, "liggghts", ModelKind::Hertz, h, 2))
+        {
             out.insert(format!("liggghts 2 ranks: {m} / hertz"), v);
         }
     }
@@ -314,7 +327,7 @@ fn ratios(r: &mut Report) {
     let sizes: Vec<&Row> = r
         .rows
         .iter()
-        .filter(|x| x.scene.starts_with(packing::SCENE) && x.threads == 1 && x.model == "hertz")
+        .filter(|x| x.scene.starts_with(packing::SCENE) && x.threads == 1 && x.model == ModelKind::Hertz)
         .collect();
     if let (Some(first), Some(last)) = (sizes.first(), sizes.last()) {
         if first.n != last.n {
@@ -332,7 +345,7 @@ fn ratios(r: &mut Report) {
     };
     for n in deck {
         let scene = format!("{}_N{n}", packing::DECK_SCENE);
-        let row = |e: &str, t: usize| find(r, e, "hertz", &scene, t);
+        let row = |e: &str, t: usize| find(r, e, ModelKind::Hertz, &scene, t);
         for (name, a, b) in [
             ("rust 1 thread / liggghts 1 rank", row("rust", 1), row("liggghts", 1)),
             ("rust 2 threads / liggghts 1 rank", row("rust", 2), row("liggghts", 1)),
@@ -396,7 +409,7 @@ mod tests {
     fn row(engine: &'static str, threads: usize, rate: f64) -> Row {
         Row {
             engine,
-            model: "hertz".into(),
+            model: ModelKind::Hertz.into(),
             scene: hydrogel::SCENE.into(),
             n: 514,
             threads,
@@ -422,7 +435,7 @@ mod tests {
         // The machine slows down by half in round 2: the rows' rates move, their ratio does not.
         let merged = merge(vec![round(4.0, 8.0, 12.0), round(2.0, 4.0, 6.0), round(4.0, 6.0, 8.0)]);
         assert_eq!(merged.rounds, 3);
-        let rust1 = find(&merged, "rust", "hertz", hydrogel::SCENE, 1).unwrap();
+        let rust1 = find(&merged, "rust", ModelKind::Hertz, hydrogel::SCENE, 1).unwrap();
         assert_eq!(rust1.particle_steps_per_s, 6.0);
         assert_eq!(rust1.rounds_particle_steps_per_s, vec![8.0, 4.0, 6.0]);
         // Costs rust / liggghts per round: 0.5, 0.5, 2/3; median 0.5 (the medians of the rows

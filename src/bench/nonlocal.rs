@@ -31,7 +31,7 @@ pub fn rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> R
         say(&format!("nonlocal 514 to phi 0.85, {STEPS} steps, kernel {}: {secs:.1} s", kind.name()));
         report.rows.push(Row {
             engine: "rust",
-            model: format!("nonlocal_{}", kind.name()),
+            model: format!("nonlocal_{}", kind.name()).into(),
             scene: SCENE.into(),
             n: spheres.len(),
             // FIRE's force evaluation runs on the rayon pool (Newton's sparse LU on one thread).

@@ -15,6 +15,7 @@ use crate::engine::{Closure, Domain, World};
 use crate::outputs::loop_totals;
 use crate::physics::ghods2022::MprTest;
 use crate::physics::hertz::Tangential;
+use crate::physics::model_kind::ModelKind;
 use crate::physics::{Material, Vec3};
 
 pub const SCENE: &str = "packing_phi0.8";
@@ -58,11 +59,8 @@ pub fn scene(k: usize, advanced: bool) -> Result<World, String> {
     }
     w.skin = 0.05 * d;
     w.integrate = true;
-    let mut seed = 0x9e3779b97f4a7c15u64;
-    let mut rnd = move || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
+    let mut rng = crate::rng::Lcg64(0x9e3779b97f4a7c15);
+    let mut rnd = move || rng.symmetric();
     let basis = [[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]];
     let mut id = 1;
     for i in 0..k {
@@ -196,7 +194,7 @@ fn deck_rows(opts: &Options, report: &mut Report, say: &mut dyn FnMut(&str)) -> 
                 say(&format!("{what}: {rate:.3e} particle-steps/s"));
                 report.rows.push(Row {
                     engine,
-                    model: "hertz".into(),
+                    model: ModelKind::Hertz.into(),
                     scene: format!("{DECK_SCENE}_N{n}"),
                     n,
                     threads,
@@ -236,7 +234,7 @@ pub fn rows(
     let warmup = 5 + crate::engine::THREAD_PROBE_STEPS;
     let base = rss_bytes();
     for &k in cells(opts.quick) {
-        for (model, advanced) in [("hertz", false), ("mc_advanced", true)] {
+        for (model, advanced) in [(ModelKind::Hertz, false), (ModelKind::McAdvanced, true)] {
             for threads in [1, 2] {
                 if round > 0 && (advanced || threads > 1) {
                     continue;

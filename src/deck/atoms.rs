@@ -16,92 +16,39 @@ impl Deck {
         Ok(())
     }
 
+    /// `read_data FILE`: the box, the atoms and their velocities ([`super::data_file`]).
     pub(super) fn read_data(&mut self, file: &str) -> R<()> {
         let path = self.input_path(file);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| format!("cannot read data file {}: {e}", path.display()))?;
-        let mut b = [0.0; 6];
-        let mut natoms = 0usize;
-        let lines = text.lines().skip(1);
-        let mut section = "";
-        let mut vel_seen = false;
-        // Velocities name atoms by id: one map for the section (a search per line is quadratic).
-        let mut by_id = std::collections::HashMap::new();
-        for l in lines {
-            let l = strip_comment(l).trim();
-            if l.is_empty() {
-                continue;
+        let d = super::data_file::read(&path)?;
+        if let Some(n) = d.atom_types {
+            self.ntypes = n;
+        }
+        if let Some(b) = d.bounds {
+            self.set_box(b)?;
+        }
+        for a in &d.atoms {
+            if a.typ < 1 || a.typ > self.ntypes {
+                return Err(format!(
+                    "{}: atom {} has type {} outside 1..{}",
+                    path.display(),
+                    a.id,
+                    a.typ,
+                    self.ntypes
+                ));
             }
-            let t: Vec<&str> = l.split_whitespace().collect();
-            match t.as_slice() {
-                [n, "atoms"] => natoms = int(n)? as usize,
-                [n, "atom", "types"] => self.ntypes = int(n)? as usize,
-                [lo, hi, "xlo", "xhi"] => (b[0], b[1]) = (num(lo)?, num(hi)?),
-                [lo, hi, "ylo", "yhi"] => (b[2], b[3]) = (num(lo)?, num(hi)?),
-                [lo, hi, "zlo", "zhi"] => (b[4], b[5]) = (num(lo)?, num(hi)?),
-                ["Atoms", ..] => {
-                    self.set_box(b)?;
-                    section = "Atoms";
-                }
-                ["Velocities"] => {
-                    section = "Velocities";
-                    vel_seen = true;
-                    by_id = self.world.p.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
-                }
-                [word, ..] if word.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) => {
-                    return Err(unsupported(&format!(
-                        "data file section or header \"{l}\" in {}",
-                        path.display()
-                    )));
-                }
-                _ => match section {
-                    "Atoms" => {
-                        if t.len() < 7 {
-                            return Err(format!(
-                                "{}: Atoms line needs id type diameter density x y z: \"{l}\"",
-                                path.display()
-                            ));
-                        }
-                        let id = int(t[0])?;
-                        let typ = int(t[1])? as usize;
-                        if typ < 1 || typ > self.ntypes {
-                            return Err(format!(
-                                "{}: atom {id} has type {typ} outside 1..{}",
-                                path.display(),
-                                self.ntypes
-                            ));
-                        }
-                        let x = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
-                        self.world.p.push(id, typ - 1, x, num(t[2])?, num(t[3])?);
-                        if t.len() >= 10 {
-                            let i = self.world.p.len() - 1;
-                            self.world.p.image[i] = [int(t[7])? as i32, int(t[8])? as i32, int(t[9])? as i32];
-                        }
-                    }
-                    "Velocities" => {
-                        if t.len() < 7 {
-                            return Err(format!(
-                                "{}: Velocities line needs id vx vy vz wx wy wz",
-                                path.display()
-                            ));
-                        }
-                        let id = int(t[0])?;
-                        let i = *by_id.get(&id).ok_or_else(|| format!("no atom with id {id}"))?;
-                        self.world.p.v[i] = Vec3::new(num(t[1])?, num(t[2])?, num(t[3])?);
-                        self.world.p.omega[i] = Vec3::new(num(t[4])?, num(t[5])?, num(t[6])?);
-                    }
-                    _ => return Err(format!("{}: data line outside a section: \"{l}\"", path.display())),
-                },
+            self.world.p.push(a.id, a.typ - 1, Vec3::new(a.x[0], a.x[1], a.x[2]), a.diameter, a.density);
+            if let Some(image) = a.image {
+                let i = self.world.p.len() - 1;
+                self.world.p.image[i] = image;
             }
         }
-        if self.world.p.len() != natoms {
-            return Err(format!(
-                "{}: header says {natoms} atoms, found {}",
-                path.display(),
-                self.world.p.len()
-            ));
+        // The particles were empty before (the box did not exist): the file's index is theirs.
+        for &(i, v) in &d.velocities {
+            self.world.p.v[i] = Vec3::new(v[0], v[1], v[2]);
+            self.world.p.omega[i] = Vec3::new(v[3], v[4], v[5]);
         }
-        self.say(&format!("  {} atoms{}", natoms, if vel_seen { ", velocities read" } else { "" }));
+        let read = if d.has_velocities { ", velocities read" } else { "" };
+        self.say(&format!("  {} atoms{read}", d.natoms));
         Ok(())
     }
 

@@ -8,6 +8,7 @@
 mod atom_vars;
 mod atoms;
 mod commands;
+pub mod data_file;
 mod dumps;
 pub mod expr;
 mod fixes;

@@ -101,116 +101,61 @@ fn one() -> f64 {
     1.0
 }
 
-/// Reads the `Atoms` section of a LIGGGHTS data file (atom_style sphere: `id type diameter density
-/// x y z [ix iy iz]`). Every particle gets `material`. Returns the spheres and their densities.
+/// Reads the atoms of a LIGGGHTS data file (atom_style sphere) with the crate's one data-file
+/// reader ([`crate::deck::data_file`]). Every particle gets `material`. Returns the spheres and
+/// their densities.
 pub fn read_liggghts_data(path: &Path, material: Material) -> Result<(Vec<Sphere>, Vec<f64>), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let mut expected: Option<usize> = None;
-    let mut lines = text.lines().enumerate();
-    for (_, line) in lines.by_ref() {
-        let l = line.split('#').next().unwrap_or("").trim();
-        let words: Vec<&str> = l.split_whitespace().collect();
-        if words.len() == 2 && words[1] == "atoms" {
-            expected = words[0].parse().ok();
-        }
-        if words.first() == Some(&"Atoms") {
-            break;
-        }
-    }
-    let expected = expected.ok_or_else(|| format!("{}: no 'N atoms' header line", path.display()))?;
-    let mut out = Vec::with_capacity(expected);
-    let mut densities = Vec::with_capacity(expected);
-    for (no, line) in lines {
-        let l = line.split('#').next().unwrap_or("").trim();
-        if l.is_empty() {
-            if out.is_empty() {
-                continue;
-            }
-            break;
-        }
-        let w: Vec<&str> = l.split_whitespace().collect();
-        let bad = |what: &str| format!("{} line {}: {what}: '{line}'", path.display(), no + 1);
-        if w.len() < 7 {
-            return Err(bad("expected 'id type diameter density x y z'"));
-        }
-        let id: u64 = w[0].parse().map_err(|_| bad("bad atom id"))?;
-        let num = |k: usize| -> Result<f64, String> {
-            w[k].parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| bad("non-numeric or non-finite value"))
-        };
-        let diameter = num(2)?;
-        if diameter <= 0.0 {
+    let d = crate::deck::data_file::read(path)?;
+    let mut out = Vec::with_capacity(d.atoms.len());
+    let mut densities = Vec::with_capacity(d.atoms.len());
+    for a in &d.atoms {
+        let bad = |what: &str| format!("{}: atom {}: {what}", path.display(), a.id);
+        if a.diameter <= 0.0 {
             return Err(bad("diameter must be > 0"));
         }
-        let density = num(3)?;
-        if density <= 0.0 {
+        if a.density <= 0.0 {
             return Err(bad("density must be > 0"));
         }
-        out.push(Sphere { id, x: Vec3::new(num(4)?, num(5)?, num(6)?), radius: 0.5 * diameter, material });
-        densities.push(density);
-    }
-    if out.len() != expected {
-        return Err(format!(
-            "{}: header announces {expected} atoms, Atoms section has {}",
-            path.display(),
-            out.len()
-        ));
+        let id = u64::try_from(a.id).map_err(|_| bad("bad atom id"))?;
+        out.push(Sphere { id, x: Vec3::new(a.x[0], a.x[1], a.x[2]), radius: 0.5 * a.diameter, material });
+        densities.push(a.density);
     }
     Ok((out, densities))
 }
 
-/// Reads the last frame of a LIGGGHTS `dump custom` text file that has the columns `id`, `radius`
-/// (or `diameter`), `x`, `y`, `z` (any order, other columns ignored), e.g. the state written by
-/// `liggghts_inputs/hydrogel.in` with `-var statestroke N`. Every particle gets `material`.
+/// Reads the last frame of a LIGGGHTS `dump custom` text file (with the crate's one dump reader,
+/// [`crate::outputs::read_dump`]) that has the columns `id`, `radius` (or `diameter`), `x`, `y`,
+/// `z` (any order, other columns ignored), e.g. the state written by `liggghts_inputs/hydrogel.in`
+/// with `-var statestroke N`. Every particle gets `material`.
 pub fn read_liggghts_dump(path: &Path, material: Material) -> Result<Vec<Sphere>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let lines: Vec<&str> = text.lines().collect();
-    let start = lines
-        .iter()
-        .rposition(|l| l.starts_with("ITEM: TIMESTEP"))
+    let frame = crate::outputs::read_dump(path)?
+        .pop()
         .ok_or_else(|| format!("{}: no 'ITEM: TIMESTEP' frame", path.display()))?;
-    let frame = &lines[start..];
-    let count_at = frame
-        .iter()
-        .position(|l| l.starts_with("ITEM: NUMBER OF ATOMS"))
-        .ok_or_else(|| format!("{}: no 'ITEM: NUMBER OF ATOMS'", path.display()))?;
-    let n: usize = frame
-        .get(count_at + 1)
-        .and_then(|l| l.trim().parse().ok())
-        .ok_or_else(|| format!("{}: bad atom count", path.display()))?;
-    let head_at = frame
-        .iter()
-        .position(|l| l.starts_with("ITEM: ATOMS"))
-        .ok_or_else(|| format!("{}: no 'ITEM: ATOMS' header", path.display()))?;
-    let names: Vec<&str> = frame[head_at]["ITEM: ATOMS".len()..].split_whitespace().collect();
-    let col = |name: &str| names.iter().position(|c| *c == name);
-    let need =
-        |name: &str| col(name).ok_or_else(|| format!("{}: dump has no '{name}' column", path.display()));
+    let need = |name: &str| {
+        frame.column(name).ok_or_else(|| format!("{}: dump has no '{name}' column", path.display()))
+    };
     let (ci, cx, cy, cz) = (need("id")?, need("x")?, need("y")?, need("z")?);
-    let (cr, scale) = match (col("radius"), col("diameter")) {
+    let (cr, scale) = match (frame.column("radius"), frame.column("diameter")) {
         (Some(c), _) => (c, 1.0),
         (None, Some(c)) => (c, 0.5),
         _ => return Err(format!("{}: dump has neither 'radius' nor 'diameter'", path.display())),
     };
-    let rows = frame
-        .get(head_at + 1..head_at + 1 + n)
-        .filter(|r| r.len() == n)
-        .ok_or_else(|| format!("{}: the last frame announces {n} atoms but is shorter", path.display()))?;
-    let mut out = Vec::with_capacity(n);
-    for (k, line) in rows.iter().enumerate() {
-        let w: Vec<&str> = line.split_whitespace().collect();
-        let bad = || format!("{} frame line {}: '{line}'", path.display(), k + 1);
-        let num = |c: usize| -> Result<f64, String> {
-            w.get(c).and_then(|v| v.parse::<f64>().ok()).filter(|v| v.is_finite()).ok_or_else(bad)
-        };
-        let id: u64 = w.get(ci).and_then(|v| v.parse().ok()).ok_or_else(bad)?;
-        let radius = scale * num(cr)?;
-        if radius <= 0.0 {
+    let mut out = Vec::with_capacity(frame.rows.len());
+    for (k, row) in frame.rows.iter().enumerate() {
+        let v = row[ci];
+        if !(v >= 0.0 && v.fract() == 0.0) {
+            return Err(format!("{} frame line {}: bad atom id {v}", path.display(), k + 1));
+        }
+        let id = v as u64;
+        let radius = scale * row[cr];
+        if !(radius > 0.0 && radius.is_finite()) {
             return Err(format!("{}: particle {id}: radius must be > 0", path.display()));
         }
-        out.push(Sphere { id, x: Vec3::new(num(cx)?, num(cy)?, num(cz)?), radius, material });
+        let x = Vec3::new(row[cx], row[cy], row[cz]);
+        if !x.iter().all(|c| c.is_finite()) {
+            return Err(format!("{}: particle {id}: non-finite position", path.display()));
+        }
+        out.push(Sphere { id, x, radius, material });
     }
     Ok(out)
 }

@@ -110,11 +110,8 @@ mod tests {
 
     #[test]
     fn bracket_pair_is_bitwise_two_brackets() {
-        let mut s: u64 = 12345;
-        let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut rng = crate::rng::Lcg64(12345);
+        let mut next = || rng.symmetric();
         for _ in 0..10_000 {
             let na = Vec3::new(next(), next(), next()).normalize();
             let nb = Vec3::new(next(), next(), next()).normalize();
@@ -130,11 +127,8 @@ mod tests {
     /// (chords along ±n where 1 ± n·u vanishes, and coincident points).
     #[test]
     fn bracket_over_chord_matches_bracket_pair() {
-        let mut s: u64 = 987;
-        let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut rng = crate::rng::Lcg64(987);
+        let mut next = || rng.symmetric();
         let mut worst: f64 = 0.0;
         for k in 0..20_000 {
             let na = Vec3::new(next(), next(), next()).normalize();

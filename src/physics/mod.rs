@@ -27,6 +27,7 @@ pub mod hooke_hysteresis;
 pub mod lanes;
 pub mod material;
 pub mod mc_settings;
+pub mod model_kind;
 pub mod pair;
 pub mod rolling_cdt;
 pub mod sjkr;

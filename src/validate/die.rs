@@ -18,6 +18,7 @@ use crate::harness::runner::{self, DeckRun};
 use crate::nonlocal::scene::Scene;
 use crate::nonlocal::KernelKind;
 use crate::outputs::nrmse;
+use crate::physics::model_kind::ModelKind;
 
 /// Sphere diameter [m] and plate speed [m/s] of App. B; the decks' time step [s].
 const D: f64 = 0.002;
@@ -85,16 +86,16 @@ fn bcc() -> Die {
 }
 
 struct DemModel {
-    name: &'static str,
+    name: ModelKind,
     law: &'static str,
     gamma: f64,
     mpr: f64,
 }
 
 const MODELS: [DemModel; 3] = [
-    DemModel { name: "hertz", law: "1", gamma: 1.0, mpr: 0.0 },
-    DemModel { name: "standard_mc", law: "2", gamma: GAMMA_STANDARD, mpr: 0.0 },
-    DemModel { name: "mc_advanced", law: "0", gamma: GAMMA_ADVANCED, mpr: MPR_ADVANCED },
+    DemModel { name: ModelKind::Hertz, law: "1", gamma: 1.0, mpr: 0.0 },
+    DemModel { name: ModelKind::StandardMc, law: "2", gamma: GAMMA_STANDARD, mpr: 0.0 },
+    DemModel { name: ModelKind::McAdvanced, law: "0", gamma: GAMMA_ADVANCED, mpr: MPR_ADVANCED },
 ];
 
 impl DemModel {
@@ -226,7 +227,7 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
         let name = format!("nonlocal_{}", kind.name());
         push_curve(&mut rows, die.case, &name, "kernel_scale=1", &c);
         models.push(ModelSummary {
-            model: name.clone(),
+            model: name.clone().into(),
             nrmse: None,
             wall_time_s: secs,
             particle_steps_per_s: None,
@@ -262,7 +263,7 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
     for m in &MODELS {
         let run = runner::run_rust(die.deck, &m.vars(0.0))?;
         let curve = curve_of(&run, die.side)?;
-        push_curve(&mut rows, die.case, m.name, &m.params(), &curve);
+        push_curve(&mut rows, die.case, m.name.name(), &m.params(), &curve);
         let mut line = format!(
             "| rust | {} | {} | {:.3} | {:.3e} |",
             m.name,
@@ -323,7 +324,7 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
             ));
             ok &= diff <= tol;
             models.push(ModelSummary {
-                model: name,
+                model: name.into(),
                 nrmse: Some(lp.max(ls)),
                 wall_time_s: lrun.wall_time_s,
                 particle_steps_per_s: Some(lrun.particle_steps_per_s),
@@ -347,13 +348,13 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
             " |".repeat(2 * refs.len() - 2)
         );
         models.push(ModelSummary {
-            model: fname,
+            model: fname.into(),
             nrmse: Some(fp.max(fs)),
             wall_time_s: frun.wall_time_s,
             particle_steps_per_s: Some(frun.particle_steps_per_s),
             metrics: Default::default(),
         });
-        curves.push((m.name, curve));
+        curves.push((m.name.name(), curve));
     }
 
     // Physics checks that hold whatever the reference kernel.
@@ -420,7 +421,7 @@ fn run_die(die: Die, opts: &Options) -> Result<CaseResult, String> {
         }
     }
     let _ = writeln!(md, "\n![{} γ scan]({scan_png})", die.case);
-    if let Some(m) = models.iter_mut().find(|m| m.model == "standard_mc") {
+    if let Some(m) = models.iter_mut().find(|m| m.model == ModelKind::StandardMc) {
         for (k, gamma, e) in &best {
             m.metrics.insert(format!("gamma_scan_best_gamma_{}", k.name()), *gamma);
             m.metrics.insert(format!("gamma_scan_best_nrmse_{}", k.name()), *e);
@@ -511,7 +512,7 @@ fn gamma_scan(
     // Per reference: every (γ, plate, side) that ran.
     let mut found: Vec<Vec<(f64, f64, f64)>> = vec![Vec::new(); refs.len()];
     for gamma in scan_gammas() {
-        let m = DemModel { name: "standard_mc", law: "2", gamma, mpr: 0.0 };
+        let m = DemModel { name: ModelKind::StandardMc, law: "2", gamma, mpr: 0.0 };
         let curve = match runner::run_rust(die.deck, &m.vars(0.0)) {
             Ok(run) => curve_of(&run, die.side)?,
             Err(f) => match f.instability {
@@ -670,7 +671,7 @@ fn continuum_section(
         .chain(statics.iter().map(|(n, c)| (n.clone(), *c)));
     for (name, c) in named {
         let e = cref.errors(c);
-        if let Some(m) = models.iter_mut().find(|m| m.model == name) {
+        if let Some(m) = models.iter_mut().find(|m| m.model.as_str() == name) {
             m.metrics.insert("nrmse_plate_continuum".into(), e.plate);
             m.metrics.insert("nrmse_side_continuum".into(), e.side);
             m.metrics.insert("nrmse_side_platemean_continuum".into(), e.side_plate_mean);
@@ -684,7 +685,7 @@ fn continuum_section(
         for (q, v) in [("plate_err_pa", p[2]), ("side_err_pa", p[4])] {
             rows.push(Row {
                 case: "single_particle",
-                model: name.clone(),
+                model: name.clone().into(),
                 params: "fem_finest_mesh".into(),
                 x_name: "plate_disp_over_r".into(),
                 x: p[0],
@@ -695,7 +696,7 @@ fn continuum_section(
     }
     let u = cref.own_uncertainty();
     models.push(ModelSummary {
-        model: name,
+        model: name.into(),
         nrmse: None,
         wall_time_s: 0.0,
         particle_steps_per_s: None,

@@ -24,11 +24,13 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::physics::model_kind::{ModelKind, ModelLabel};
+
 /// One value of the long-form CSV.
 #[derive(Debug, Clone, Serialize)]
 pub struct Row {
     pub case: &'static str,
-    pub model: String,
+    pub model: ModelLabel,
     pub params: String,
     pub x_name: String,
     pub x: f64,
@@ -39,7 +41,7 @@ pub struct Row {
 /// Per-model figures of merit of one case.
 #[derive(Debug, Clone, Serialize)]
 pub struct ModelSummary {
-    pub model: String,
+    pub model: ModelLabel,
     /// NRMSE against the case's reference, where the case has one.
     pub nrmse: Option<f64>,
     pub wall_time_s: f64,
@@ -150,7 +152,7 @@ fn write_csv(path: &Path, rows: &[Row]) -> Result<(), String> {
             s,
             "{},{},{},{},{:e},{},{:e}",
             r.case,
-            csv_field(&r.model),
+            csv_field(r.model.as_str()),
             csv_field(&r.params),
             csv_field(&r.x_name),
             r.x,
@@ -269,8 +271,8 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
         let mut references: Vec<(String, f64)> = Vec::new();
         for m in &r.models {
             let Some(e) = m.nrmse else {
-                if m.model.starts_with("nonlocal") {
-                    references.push((m.model.clone(), m.wall_time_s));
+                if m.model.as_str().starts_with("nonlocal") {
+                    references.push((m.model.to_string(), m.wall_time_s));
                     let _ = writeln!(
                         table,
                         "| {} | {} (reference) | - | {:.3} | - |",
@@ -289,14 +291,16 @@ fn speed_vs_error(opts: &Options, results: &[CaseResult]) -> Result<String, Stri
                 m.particle_steps_per_s.map(|v| format!("{v:.3e}")).unwrap_or_else(|| "-".into())
             );
             // One colour per engine and model family within a panel; the table names every point.
-            let engine = if m.model.starts_with("liggghts_") { "LIGGGHTS" } else { "Rust DEM" };
-            let family = ["mc_advanced", "standard_mc", "hertz"]
+            let model = m.model.as_str();
+            let engine = if model.starts_with("liggghts_") { "LIGGGHTS" } else { "Rust DEM" };
+            let family = [ModelKind::McAdvanced, ModelKind::StandardMc, ModelKind::Hertz]
                 .into_iter()
-                .find(|f| m.model.contains(f))
-                .unwrap_or(m.model.as_str());
+                .map(ModelKind::name)
+                .find(|f| model.contains(f))
+                .unwrap_or(model);
             // The approximate passes (docs/dem.md) get their own colour: their speed is the point.
             let approx =
-                if m.model.contains("_tol") || m.model.contains("_every") { ", approximate" } else { "" };
+                if model.contains("_tol") || model.contains("_every") { ", approximate" } else { "" };
             let label = format!("{family}{approx} ({engine})");
             let point = (m.wall_time_s.max(1e-4), (100.0 * e).max(1e-4));
             match series.iter_mut().find(|s| s.label == label) {

@@ -21,6 +21,7 @@ use crate::harness::calibration::{calibrated, Law};
 use crate::harness::runner::{self, DeckRun};
 use crate::nonlocal::{Kernel, KernelKind};
 use crate::outputs::nrmse;
+use crate::physics::model_kind::ModelKind;
 
 const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
 /// Overrides the directory of the Debian example (a directory without it, e.g. `none`, makes the
@@ -352,7 +353,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         let (refc, ref_secs) = reference(&dump, nu, kind, s.nonlocal_steps, &mut |f| partial(f))?;
         push_curve(rows, &format!("nonlocal_{}", kind.name()), format!("nu={nu}"), &refc);
         models.push(ModelSummary {
-            model: format!("nonlocal_{} nu={nu}", kind.name()),
+            model: format!("nonlocal_{} nu={nu}", kind.name()).into(),
             nrmse: None,
             wall_time_s: ref_secs,
             particle_steps_per_s: None,
@@ -360,7 +361,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         });
         let summary = |models: &mut Vec<ModelSummary>, name: String, e: f64, run: &DeckRun| {
             models.push(ModelSummary {
-                model: name,
+                model: name.into(),
                 nrmse: Some(e),
                 wall_time_s: run.wall_time_s,
                 particle_steps_per_s: Some(run.particle_steps_per_s),
@@ -370,7 +371,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         note("hertz");
         let (hc, hrun) = compress(Law::HERTZ, nu, &s, &data)?;
         let he = error(&hc, &refc);
-        push_curve(rows, "hertz", format!("nu={nu}"), &hc);
+        push_curve(rows, ModelKind::Hertz.name(), format!("nu={nu}"), &hc);
         summary(models, format!("hertz nu={nu}"), he, &hrun);
         // Highest stable standard-MC γ of the ladder; every stable rung is a valid run.
         let mut best: Option<(f64, Curve, DeckRun)> = None;
@@ -389,7 +390,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         let (gamma_max, se, sc) = match &best {
             Some((g, c, r)) => {
                 let e = error(c, &refc);
-                push_curve(rows, "standard_mc", format!("nu={nu} gamma={g}"), c);
+                push_curve(rows, ModelKind::StandardMc.name(), format!("nu={nu} gamma={g}"), c);
                 summary(models, format!("standard_mc nu={nu} gamma={g}"), e, r);
                 (Some(*g), e, c.clone())
             }
@@ -423,7 +424,7 @@ pub fn run(opts: &Options) -> Result<CaseResult, String> {
         let (bc, be, _) = advanced(Law::advanced(GAMMA_ADVANCED, MPR_ADVANCED), "mc_advanced_app_b")?;
         let cal = if opts.quick { None } else { calibrated(nu) };
         let (ac, ae, at) = match cal {
-            Some(m) => advanced(m, "mc_advanced")?,
+            Some(m) => advanced(m, ModelKind::McAdvanced.name())?,
             None => (bc.clone(), be, f64::NAN),
         };
         // The speed-against-error trade of the two approximations (docs/dem.md) on the law of the

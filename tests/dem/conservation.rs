@@ -22,11 +22,8 @@ fn gas(restitution: f64, friction: f64, dt: f64) -> World {
     w.dt = dt;
     w.skin = 2e-4;
     w.integrate = true;
-    let mut seed = 12345u64;
-    let mut rnd = move || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
+    let mut rng = mcdem::rng::Lcg64(12345);
+    let mut rnd = move || rng.symmetric();
     let mut id = 1;
     for a in 0..2 {
         for b in 0..2 {

@@ -313,18 +313,17 @@ fn threads_mode_is_checked_and_changes_no_result() {
         assert!(o.status.success(), "{mode}: {}", String::from_utf8_lossy(&o.stderr));
         // The share of threaded steps, from every `Loop time` line of the run.
         let log = String::from_utf8_lossy(&o.stdout).into_owned();
-        let shares: Vec<f64> = log
-            .lines()
-            .filter(|l| l.starts_with("Loop time of"))
-            .map(|l| {
+        let shares: Vec<f64> = mcdem::outputs::loop_details(&log)
+            .unwrap()
+            .iter()
+            .map(|d| {
                 // Serial mode names one thread whatever the pool size (the pool is never used).
                 if mode == "serial" {
-                    assert!(l.contains(", 1 thread,") && !l.contains("threaded in"), "{mode}: {l}");
+                    assert!(d.threads == 1 && d.threaded_percent.is_none(), "{mode}: {d:?}");
                     return 0.0;
                 }
-                assert!(l.contains(", 2 threads, threaded in "), "{mode}: {l}");
-                let (_, rest) = l.split_once("threaded in ").unwrap_or_else(|| panic!("{mode}: {l}"));
-                rest.split_once(" %").unwrap().0.parse().unwrap()
+                assert_eq!(d.threads, 2, "{mode}: {d:?}");
+                d.threaded_percent.unwrap_or_else(|| panic!("{mode}: {d:?}"))
             })
             .collect();
         assert!(!shares.is_empty(), "{mode}: no Loop time line in\n{log}");
@@ -531,4 +530,32 @@ fn check_timestep_gran_reports_rayleigh_and_hertz_fractions() {
         !ok && out.contains("in.test:18: fix ts check/timestep/gran: expected 'warn yes' or 'warn no'"),
         "{out}"
     );
+}
+
+/// `read_data` through the one data-file reader (`src/deck/data_file.rs`): a good file gives its
+/// atoms and velocities; a count that does not match the header and an unknown section stop with
+/// the deck's file:line and the data file named.
+#[test]
+fn read_data_reads_atoms_and_velocities_and_names_bad_files() {
+    let data = "title\n\n2 atoms\n1 atom types\n0 1 xlo xhi\n0 1 ylo yhi\n0 1 zlo zhi\n\nAtoms\n\n\
+                1 1 0.1 1000 0.25 0.5 0.5\n2 1 0.1 1000 0.75 0.5 0.5\n\nVelocities\n\n2 0.5 0 0 0 0 0\n";
+    let deck = "units si\natom_style sphere\nboundary f f f\nread_data f.data\n\
+                fix m1 all property/global youngsModulus peratomtype 5e6\n\
+                fix m2 all property/global poissonsRatio peratomtype 0.3\n\
+                fix m3 all property/global coefficientRestitution peratomtypepair 1 0.8\n\
+                fix m4 all property/global coefficientFriction peratomtypepair 1 0.3\n\
+                pair_style gran model hertz tangential history\npair_coeff * *\ntimestep 1e-6\n\
+                dump d all custom 1 out.dump id x vx radius\nrun 0\n";
+    let (ok, out, dir) = run_in("in.test", deck, &[], &[("f.data", data)]);
+    assert!(ok && out.contains("2 atoms, velocities read"), "{out}");
+    let rows = mcdem::outputs::read_dump(&dir.path().join("out.dump")).unwrap().pop().unwrap().rows;
+    assert_eq!(rows, vec![vec![1.0, 0.25, 0.0, 0.05], vec![2.0, 0.75, 0.5, 0.05]]);
+    for (from, to, says) in [
+        ("2 atoms", "3 atoms", "f.data: header says 3 atoms, found 2"),
+        ("1 atom types", "Masses", "unsupported data file section or header \"Masses\" in "),
+    ] {
+        let (ok, out, _) = run_in("in.test", deck, &[], &[("f.data", &data.replace(from, to))]);
+        let line = out.lines().find(|l| l.starts_with("ERROR:")).unwrap_or_default();
+        assert!(!ok && line.contains("in.test:4: ") && line.contains(says), "{to}: {out}");
+    }
 }

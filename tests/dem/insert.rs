@@ -428,6 +428,37 @@ fn stream_bad_keywords_stop_with_file_and_line() {
     }
 }
 
+/// The keywords both insertion fixes read through one parser (`src/deck/fixes/insert_common.rs`)
+/// stop each fix with the same message, naming the deck line and the fix.
+#[test]
+fn common_insertion_keywords_stop_both_fixes_alike() {
+    let pack = deck(BLOCK, "particles_in_region 10", 1);
+    let stream = stream_deck("particlerate 10000", "nparticles 70", 10, 10);
+    let pack_seed = "seed 1 distributiontemplate pdd";
+    let stream_seed = "seed 32452867 distributiontemplate pdd";
+    for (to, says) in [
+        ("seed -3 distributiontemplate pdd", "seed must be a whole number >= 0, got '-3'"),
+        ("seed 7 distributiontemplate nope", "nope is not a particledistribution/discrete fix"),
+        (
+            "seed 7 distributiontemplate pdd random_distribute sometimes",
+            "random_distribute must be exact or uncorrelated, got 'sometimes'",
+        ),
+        ("seed 7 distributiontemplate pdd vel constant 1 x 0", "expected a number, got \"x\""),
+    ] {
+        let (ok, out, _) = run_deck(&pack.replace(pack_seed, to), &[]);
+        let needle = if says.starts_with("expected") {
+            format!("in.test:18: {says}")
+        } else {
+            format!("in.test:18: fix ins insert/pack: {says}")
+        };
+        assert!(!ok && out.contains(&needle), "pack, {to}: {out}");
+        let (ok, out, _) = run_stream(&stream.replace(stream_seed, to));
+        let needle = needle.replace("in.test:18: fix ins insert/pack", "in.test:17: fix ins insert/stream");
+        let needle = needle.replace("in.test:18: expected", "in.test:17: expected");
+        assert!(!ok && out.contains(&needle), "stream, {to}: {out}");
+    }
+}
+
 #[test]
 fn dump_mesh_stl_writes_the_moved_mesh_read_back() {
     // The face mesh moved up at 0.1 m/s: 50 steps of 10 µs lift it by 50 µm per frame.

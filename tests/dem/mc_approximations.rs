@@ -30,12 +30,7 @@ fn piston_force(dir: &Path, options: &[&str]) -> (Vec<f64>, String) {
         cmd.arg("-var").arg(k).arg(v);
     }
     let run = cmd.args(["-log", "none", "--no-progress"]).args(options).assert().success();
-    let force = std::fs::read_to_string(out)
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| l.split_whitespace().nth(3).unwrap().parse().unwrap())
-        .collect();
+    let force = mcdem::outputs::read_ave_time(&out).unwrap().iter().map(|r| r[3]).collect();
     (force, String::from_utf8(run.get_output().stdout.clone()).unwrap())
 }
 
@@ -101,16 +96,9 @@ fn a_neighbour_build_always_updates() {
     let tmp = tempfile::tempdir().unwrap();
     let (_, out) = piston_force(tmp.path(), &["--mc-update-every", "1000000000"]);
     let mut builds_total = 0;
-    for line in out.lines().filter(|l| l.starts_with("Loop time")) {
-        let number_before = |tag: &str| -> u64 {
-            let head = line.split(tag).next().unwrap();
-            head.rsplit([' ', '(']).next().unwrap().parse().unwrap()
-        };
-        let builds = number_before(" neighbour builds");
-        let passes: u64 =
-            line.split("full pass in ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
-        assert_eq!(passes, builds, "{line}");
-        builds_total += builds;
+    for d in mcdem::outputs::loop_details(&out).unwrap() {
+        assert_eq!(d.full_passes, Some(d.neighbour_builds), "{d:?}");
+        builds_total += d.neighbour_builds;
     }
     assert!(builds_total > 0, "no neighbour build in the run: {out}");
 }

@@ -36,11 +36,8 @@ fn kernel_bits() -> Vec<u64> {
     };
     use mcdem::physics::ghods2022::{Cap, MprTest};
     use mcdem::physics::Vec3;
-    let mut s: u64 = 0x6d63_6465_6d00;
-    let mut next = move || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((s >> 11) as f64) / ((1u64 << 53) as f64)
-    };
+    let mut rng = mcdem::rng::Lcg64(0x6d63_6465_6d00);
+    let mut next = move || rng.uniform();
     let mut out = Vec::new();
     for round in 0..400 {
         let n = round % 24;

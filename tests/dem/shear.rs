@@ -41,11 +41,8 @@ fn lattice(dir: &std::path::Path, n: usize, a: f64, d: f64, jitter: f64) {
     // Pseudo-random vy, vz of amplitude `jitter` m/s with zero mean: collisions between the
     // sliding lattice rows (vx comes from the velocity ramp).
     let nat = n * n * n;
-    let mut st: u64 = 12345;
-    let mut rnd = || {
-        st = st.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (st >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = mcdem::rng::Lcg64(12345);
+    let mut rnd = || rng.uniform() - 0.5;
     let v: Vec<(f64, f64)> = (0..nat).map(|_| (rnd() * jitter, rnd() * jitter)).collect();
     let (my, mz) = v.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0 / nat as f64, a.1 + b.1 / nat as f64));
     s += "\nVelocities\n\n";
@@ -122,13 +119,7 @@ fn lees_edwards_streaming_profile_and_momentum() {
             0.5 * rate * l
         );
     let _ = run(dir.path(), &deck);
-    let text = std::fs::read_to_string(dir.path().join("dump.sh")).unwrap();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
-        .skip(1)
-        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap()).collect())
-        .collect();
+    let rows = mcdem::outputs::read_dump(&dir.path().join("dump.sh")).unwrap().pop().unwrap().rows;
     assert_eq!(rows.len(), n * n * n);
     // Momentum: the peculiar momentum Σ m (v − u(y)) is what Lees–Edwards conserves (a particle
     // crossing the sheared boundary changes v_x and u_x by the same jump); it starts at zero.
@@ -168,11 +159,8 @@ fn fcc(dir: &std::path::Path, nc: usize, phi: f64, d: f64) -> f64 {
     let n = 4 * nc * nc * nc;
     let l = (n as f64 * std::f64::consts::PI * d.powi(3) / 6.0 / phi).cbrt();
     let a = l / nc as f64;
-    let mut st: u64 = 99;
-    let mut rnd = || {
-        st = st.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        0.2 * ((st >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
-    };
+    let mut rng = mcdem::rng::Lcg64(99);
+    let mut rnd = || 0.2 * (rng.uniform() - 0.5);
     let mut s =
         format!("fcc\n\n{n} atoms\n1 atom types\n0 {l} xlo xhi\n0 {l} ylo yhi\n0 {l} zlo zhi\n\nAtoms\n\n");
     let mut id = 1;
@@ -364,13 +352,7 @@ fn dense_shear(nc: usize, steps: u64, extra: &str, mode: &str, pool: &str) -> (V
         .unwrap();
     let out = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{out}");
-    let text = std::fs::read_to_string(dir.path().join("dump.sh")).unwrap();
-    let mut rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
-        .skip(1)
-        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap()).collect())
-        .collect();
+    let mut rows = mcdem::outputs::read_dump(&dir.path().join("dump.sh")).unwrap().pop().unwrap().rows;
     rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
     assert_eq!(rows.len(), 4 * nc * nc * nc);
     (rows, out)
@@ -388,13 +370,7 @@ fn coordination(out: &str) -> Vec<(u64, f64)> {
 
 /// Neighbour builds of a run's `Loop time` lines.
 fn builds(out: &str) -> u64 {
-    out.lines()
-        .filter(|l| l.starts_with("Loop time of"))
-        .map(|l| {
-            let (head, _) = l.split_once(" neighbour builds").unwrap();
-            head.rsplit_once(' ').unwrap().1.parse::<u64>().unwrap()
-        })
-        .sum()
+    mcdem::outputs::loop_details(out).unwrap().iter().map(|d| d.neighbour_builds).sum()
 }
 
 /// The Lees–Edwards skin test (rebuild when relative motion plus the sheared-image drift could

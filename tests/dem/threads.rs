@@ -102,10 +102,9 @@ fn both_threaded_pair_passes_give_the_serial_state() {
 fn scramble(w: &mut mcdem::engine::World) {
     let n = w.p.len();
     let mut order: Vec<usize> = (0..n).collect();
-    let mut s: u64 = 0x2545f4914f6cdd1d;
+    let mut rng = mcdem::rng::Lcg64(0x2545f4914f6cdd1d);
     for i in (1..n).rev() {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        order.swap(i, (s >> 33) as usize % (i + 1));
+        order.swap(i, (rng.next_u64() >> 33) as usize % (i + 1));
     }
     let old = std::mem::take(&mut w.p);
     for &i in &order {

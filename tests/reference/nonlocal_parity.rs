@@ -107,11 +107,8 @@ fn standard_mc_at_rest_is_the_nonlocal_solution_with_gamma_g() {
 /// Returns the spheres at rest, the plate height and the (top, bottom, x = 0) wall forces.
 fn random_packing_at_rest(dir: &Path) -> (Vec<(Vec3, f64)>, f64, [f64; 3]) {
     let (l, h0) = (6.6e-3, 13.2e-3);
-    let mut seed = 7u64;
-    let mut rnd = move || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
+    let mut rng = mcdem::rng::Lcg64(7);
+    let mut rnd = move || rng.symmetric();
     let mut atoms = String::new();
     let mut vol = 0.0;
     let mut id = 0;

@@ -10,6 +10,7 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
+use super::insert_common::{positive, seed};
 use crate::deck::regions::Region;
 use crate::deck::*;
 use crate::rng::SplitMix64;
@@ -166,30 +167,6 @@ struct Pack {
     omega: Vec3,
 }
 
-/// A seed as LIGGGHTS asks for it (a whole number; LIGGGHTS wants a prime > 10000, which only
-/// matters to its own generator).
-pub(super) fn seed(s: &str, what: &str) -> R<u64> {
-    s.parse::<u64>().map_err(|_| format!("{what}: seed must be a whole number >= 0, got '{s}'"))
-}
-
-/// `random_distribute exact|uncorrelated` of the insertion fixes: whether each insertion holds the
-/// distribution's exact proportions.
-pub(super) fn random_distribute(v: &str, what: &str) -> R<bool> {
-    match v {
-        "exact" => Ok(true),
-        "uncorrelated" => Ok(false),
-        _ => Err(format!("{what}: random_distribute must be exact or uncorrelated, got '{v}'")),
-    }
-}
-
-pub(super) fn positive(s: &str, what: &str) -> R<f64> {
-    let v = num(s)?;
-    if !(v > 0.0 && v.is_finite()) {
-        return Err(format!("{what} must be > 0, got {s}"));
-    }
-    Ok(v)
-}
-
 impl Deck {
     /// `fix ID group particletemplate/sphere SEED atom_type T density constant RHO radius STYLE …`
     /// with STYLE `constant R`, `gaussian MU SIGMA` or `uniform MIN MAX`.
@@ -311,30 +288,16 @@ impl Deck {
     pub(in crate::deck) fn insert_pack(&mut self, a: &[&str]) -> R<FixKind> {
         let what = format!("fix {} insert/pack", a[1]);
         let label = format!("{what} (line {})", self.line_no);
-        let (mut s, mut dist, mut region, mut target) = (None, None, None, None);
-        let (mut all_in, mut exact, mut maxattempt) = (false, true, 50usize);
+        let (mut region, mut target) = (None, None);
+        let (mut all_in, mut maxattempt) = (false, 50usize);
         let mut every = None;
-        let (mut vel, mut omega) = (Vec3::zeros(), Vec3::zeros());
-        let mut k = 4;
-        let arg = |j: usize| a.get(j).copied().ok_or_else(|| format!("{what}: {} needs a value", a[j - 1]));
-        let vec3 =
-            |j: usize| -> R<Vec3> { Ok(Vec3::new(num(arg(j)?)?, num(arg(j + 1)?)?, num(arg(j + 2)?)?)) };
         let yes_no = |v: &str, key: &str| match v {
             "yes" => Ok(true),
             "no" => Ok(false),
             _ => Err(format!("{what}: {key} must be yes or no, got '{v}'")),
         };
-        while k < a.len() {
-            let v = arg(k + 1)?;
-            k += 2;
-            match a[k - 2] {
-                "seed" => s = Some(seed(v, &what)?),
-                "distributiontemplate" => {
-                    if !self.insertion.distributions.contains_key(v) {
-                        return Err(format!("{what}: {v} is not a particledistribution/discrete fix"));
-                    }
-                    dist = Some(v.to_string());
-                }
+        let common = self.insert_keywords(a, &what, |key, v| {
+            match key {
                 "region" => {
                     let r =
                         self.regions.get(v).cloned().ok_or_else(|| format!("{what}: unknown region {v}"))?;
@@ -372,7 +335,6 @@ impl Deck {
                 "overlapcheck" if v == "yes" => {}
                 "overlapcheck" => return Err(unsupported(&format!("{what}: overlapcheck {v} (only yes)"))),
                 "all_in" => all_in = yes_no(v, "all_in")?,
-                "random_distribute" => exact = random_distribute(v, &what)?,
                 "maxattempt" => {
                     let m = int(v)?;
                     if m < 1 {
@@ -380,32 +342,25 @@ impl Deck {
                     }
                     maxattempt = m as usize;
                 }
-                "vel" if v == "constant" => {
-                    vel = vec3(k)?;
-                    k += 3;
-                }
-                "omega" if v == "constant" => {
-                    omega = vec3(k)?;
-                    k += 3;
-                }
                 // Output and parallel bookkeeping; the region volume is computed exactly.
                 "verbose" | "compress_tags" | "check_dist_from_subdomain_border" => {
-                    yes_no(v, a[k - 2])?;
+                    yes_no(v, key)?;
                 }
                 "ntry_mc" => {
                     int(v)?;
                 }
                 other => return Err(unsupported(&format!("{what} keyword {other}"))),
             }
-        }
+            Ok(())
+        })?;
         let pack = Pack {
             label,
             fix: a[1].to_string(),
             bit: self.groups.bit(a[2], &what)?,
             every,
             round: 0,
-            seed: s.ok_or_else(|| format!("{what}: seed is required"))?,
-            dist: dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
+            seed: common.seed.ok_or_else(|| format!("{what}: seed is required"))?,
+            dist: common.dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
             region: region.ok_or_else(|| format!("{what}: region is required"))?,
             target: target.ok_or_else(|| {
                 format!(
@@ -413,10 +368,10 @@ impl Deck {
                 )
             })?,
             all_in,
-            exact,
+            exact: common.exact,
             maxattempt,
-            vel,
-            omega,
+            vel: common.vel.unwrap_or_else(Vec3::zeros),
+            omega: common.omega,
         };
         self.insertion.check_distinct_seed(&what, pack.seed, &pack.dist)?;
         match pack.every {
@@ -593,7 +548,7 @@ impl Deck {
         };
         let n = want.round().max(0.0) as usize;
         // Round 0 keeps the streams of a single insertion; later rounds draw new ones.
-        let seed = pack.seed.wrapping_add(pack.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let seed = crate::rng::mix_seed(pack.seed, pack.round);
         let (templates, new) = self.draw_batch(&pack.dist, n, seed, pack.exact);
         let mut grid = self.occupied(&new);
         let p = &self.world.p;

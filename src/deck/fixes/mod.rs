@@ -4,6 +4,7 @@ mod adapt;
 mod ave_time;
 pub(super) mod check_timestep;
 pub(super) mod insert;
+mod insert_common;
 pub(super) mod momentum;
 mod move_mesh;
 mod reset_timestep;

@@ -15,7 +15,7 @@
 
 use std::collections::HashMap;
 
-use super::insert::{positive, random_distribute, seed};
+use super::insert_common::positive;
 use crate::deck::*;
 use crate::rng::SplitMix64;
 
@@ -137,31 +137,17 @@ impl Deck {
     pub(in crate::deck) fn insert_stream(&mut self, a: &[&str]) -> R<FixKind> {
         let what = format!("fix {} insert/stream", a[1]);
         let label = format!("{what} (line {})", self.line_no);
-        let (mut s, mut dist, mut total, mut rate, mut face) = (None, None, None, None, None);
+        let (mut total, mut rate, mut face) = (None, None, None);
         let (mut every, mut duration, mut extrude) = (None, None, None);
-        let (mut overlap, mut exact, mut maxattempt) = (true, true, 50usize);
-        let (mut vel, mut omega) = (None, Vec3::zeros());
-        let arg = |j: usize| a.get(j).copied().ok_or_else(|| format!("{what}: {} needs a value", a[j - 1]));
-        let vec3 =
-            |j: usize| -> R<Vec3> { Ok(Vec3::new(num(arg(j)?)?, num(arg(j + 1)?)?, num(arg(j + 2)?)?)) };
+        let (mut overlap, mut maxattempt) = (true, 50usize);
         let steps = |v: &str, key: &str| -> R<u64> {
             match int(v) {
                 Ok(n) if n >= 1 => Ok(n as u64),
                 _ => Err(format!("{what}: {key} must be a whole number >= 1, got '{v}'")),
             }
         };
-        let mut k = 4;
-        while k < a.len() {
-            let v = arg(k + 1)?;
-            k += 2;
-            match a[k - 2] {
-                "seed" => s = Some(seed(v, &what)?),
-                "distributiontemplate" => {
-                    if !self.insertion.has_distribution(v) {
-                        return Err(format!("{what}: {v} is not a particledistribution/discrete fix"));
-                    }
-                    dist = Some(v.to_string());
-                }
+        let common = self.insert_keywords(a, &what, |key, v| {
+            match key {
                 "nparticles" if v == "INF" => total = Some(Total::Unlimited),
                 "nparticles" => total = Some(Total::Count(steps(v, "nparticles")? as usize)),
                 "mass" => total = Some(Total::Mass(positive(v, &format!("{what}: mass"))?)),
@@ -193,21 +179,13 @@ impl Deck {
                         "{what}: all_in {v} (only no with a mesh/surface face)"
                     )))
                 }
-                "random_distribute" => exact = random_distribute(v, &what)?,
                 "maxattempt" => maxattempt = steps(v, "maxattempt")? as usize,
-                "vel" if v == "constant" => {
-                    vel = Some(vec3(k)?);
-                    k += 3;
-                }
-                "omega" if v == "constant" => {
-                    omega = vec3(k)?;
-                    k += 3;
-                }
                 "verbose" if v == "yes" || v == "no" => {}
                 other => return Err(unsupported(&format!("{what} keyword {other} {v}"))),
             }
-        }
-        let vel = vel.ok_or_else(|| format!("{what}: vel constant VX VY VZ is required"))?;
+            Ok(())
+        })?;
+        let vel = common.vel.ok_or_else(|| format!("{what}: vel constant VX VY VZ is required"))?;
         if vel.norm() < 1e-5 {
             return Err(format!("{what}: insertion velocity too low (|vel| < 1e-5)"));
         }
@@ -232,8 +210,8 @@ impl Deck {
             label,
             fix: a[1].to_string(),
             bit: self.groups.bit(a[2], &what)?,
-            seed: s.ok_or_else(|| format!("{what}: seed is required"))?,
-            dist: dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
+            seed: common.seed.ok_or_else(|| format!("{what}: seed is required"))?,
+            dist: common.dist.ok_or_else(|| format!("{what}: distributiontemplate is required"))?,
             round: 0,
             total: total.ok_or_else(|| format!("{what}: nparticles or mass is required"))?,
             rate: rate.ok_or_else(|| format!("{what}: massrate or particlerate is required"))?,
@@ -241,10 +219,10 @@ impl Deck {
             duration,
             extrude,
             overlap,
-            exact,
+            exact: common.exact,
             maxattempt,
             vel,
-            omega,
+            omega: common.omega,
             face: face.ok_or_else(|| format!("{what}: insertion_face is required"))?,
             // As LIGGGHTS: first on the step after the definition.
             due: self.world.step + 1,
@@ -377,7 +355,7 @@ impl Deck {
         };
         let per = nrate * g.every as f64 * self.world.dt;
         // Round 0 keeps the streams of a single insertion; later rounds draw new ones.
-        let seed = s.seed.wrapping_add(s.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let seed = crate::rng::mix_seed(s.seed, s.round);
         let mut rng = SplitMix64(seed);
         let mut n = (per + rng.uniform()) as usize;
         let left = match s.total {
