@@ -200,6 +200,15 @@ int32_t mcdem_setting_parse(int32_t k, const char *word, double *value);
  * wall may only repeat and gives with another value. */
 int32_t mcdem_settings_check_wall(const double *wall, const uint8_t *given, const double *pair);
 
+/* The material table of n atom types (walls are atom types too): per type E [Pa], nu, gamma and
+ * MPR with cap (MCDEM_CAP_ABS or MCDEM_CAP_SIGNED) into params[n] (radius 1: set each particle's
+ * own at each call), and the pair coefficients of every ordered type pair from the
+ * peratomtypepair tables restitution[n*n] and friction[n*n] (NULL: frictionless) into
+ * coeffs[n*n], row-major. MCDEM_ERR_PARAMETER names the LIGGGHTS property and the atom type(s). */
+int32_t mcdem_material_table(size_t n, const double *youngs, const double *poisson, const double *gamma,
+                             const double *mpr, int32_t cap, const double *restitution,
+                             const double *friction, mcdem_mc_params *params, mcdem_pair_coeffs *coeffs);
+
 /* Copies the last error message (NUL-terminated, truncated to len); returns its full length. */
 size_t mcdem_last_error(char *buf, size_t len);
 

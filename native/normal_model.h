@@ -183,7 +183,6 @@ private:
     // Reads the material per atom type, validates it through the core and builds the pair
     // coefficient table (one entry per type pair, walls have their own atom type).
     void read_materials();
-    void fail_property(int type, const std::string &core_msg);
 
     // The radius changes of every contact, once per force pass (bookkeeping.cpp).
     void collect_sources();

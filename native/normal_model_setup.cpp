@@ -166,48 +166,27 @@ void NormalModel<MC_ADVANCED>::read_materials() {
                                               "model mc_advanced", false);
     FixPropertyGlobal *fric = static_cast<FixPropertyGlobal *>(fric_fix);
 
+    // The library validates the values and builds the table (one builder for both engines).
+    std::vector<double> r(n * n), mu(n * n, 0.0);
+    for (int a = 0; a < n; a++) {
+        for (int b = 0; b < n; b++) {
+            r[a * n + b] = rest->compute_array(a, b);
+            if (fric) mu[a * n + b] = fric->compute_array(a, b);
+        }
+    }
+    std::vector<mcdem_mc_params> params(n);
+    std::vector<mcdem_pair_coeffs> coeffs(n * n);
+    if (mcdem_material_table(n, E, nu, gamma, mpr, signed_test_ ? MCDEM_CAP_SIGNED : MCDEM_CAP_ABS, &r[0], &mu[0],
+                             &params[0], &coeffs[0]) != MCDEM_OK)
+        error->all(FLERR, ("model mc_advanced: " + last_mcdem_error()).c_str());
+    // Atom types count from 1 in LIGGGHTS: the shim's tables keep an unused row 0.
     ntypes_ = n;
     params_.assign(n + 1, mcdem_mc_params());
     coeffs_.assign(n + 1, std::vector<mcdem_pair_coeffs>(n + 1));
-    for (int t = 1; t <= n; t++) {
-        mcdem_mc_params p;
-        p.radius = 1.0;  // placeholder: the real radius is per particle, set at each call
-        p.youngs_modulus = E[t - 1];
-        p.poisson_ratio = nu[t - 1];
-        p.gamma = gamma[t - 1];
-        p.mpr = mpr[t - 1];
-        p.cap = signed_test_ ? MCDEM_CAP_SIGNED : MCDEM_CAP_ABS;
-        if (mcdem_validate_mc_params(&p) != MCDEM_OK) fail_property(t, last_mcdem_error());
-        params_[t] = p;
-    }
     for (int a = 1; a <= n; a++) {
-        for (int b = 1; b <= n; b++) {
-            const double e = rest->compute_array(a - 1, b - 1);
-            const double mu = fric ? fric->compute_array(a - 1, b - 1) : 0.0;
-            if (mcdem_pair_coeffs_new(E[a - 1], nu[a - 1], E[b - 1], nu[b - 1], e, mu, &coeffs_[a][b]) !=
-                MCDEM_OK) {
-                char msg[700];
-                std::snprintf(msg, sizeof(msg),
-                              "model mc_advanced, atom types %d and %d (coefficientRestitution / "
-                              "coefficientFriction): %s",
-                              a, b, last_mcdem_error().c_str());
-                error->all(FLERR, msg);
-            }
-        }
+        params_[a] = params[a - 1];
+        for (int b = 1; b <= n; b++) coeffs_[a][b] = coeffs[(a - 1) * n + (b - 1)];
     }
-}
-
-void NormalModel<MC_ADVANCED>::fail_property(int type, const std::string &core_msg) {
-    // Name the LIGGGHTS property a user has to change, not the core's field.
-    const char *prop = "a material property";
-    if (core_msg.find("poisson") != std::string::npos) prop = "poissonsRatio";
-    else if (core_msg.find("young") != std::string::npos) prop = "youngsModulus";
-    else if (core_msg.find("gamma") != std::string::npos) prop = "geometricPrefactor";
-    else if (core_msg.find("mpr") != std::string::npos) prop = "maxPenetrationRatio";
-    char msg[700];
-    std::snprintf(msg, sizeof(msg), "model mc_advanced: invalid %s for atom type %d (%s)", prop, type,
-                  core_msg.c_str());
-    error->all(FLERR, msg);
 }
 
 std::map<LAMMPS *, NormalModel<MC_ADVANCED> *> NormalModel<MC_ADVANCED>::pair_models_;

@@ -17,33 +17,39 @@ extern "C" {
     fn mcdem_liggghts_main(argc: c_int, argv: *mut *mut c_char) -> c_int;
 }
 
-/// Every C ABI function (`src/ffi.rs`) the shim in `native/` calls. The shim is a static library
+/// Every C ABI function (`src/ffi/`) the shim in `native/` calls. The shim is a static library
 /// that the linker reads after this crate's objects, and an archive member is only taken in for a
 /// symbol that is still undefined when the linker reaches it: a function no Rust code refers to
 /// could be left out, and the shim's call to it would not link. A reference from Rust keeps every
-/// one of them in the executable whatever order the linker visits archives in. Keep this list
-/// equal to the `mcdem_*` calls in `native/*.cpp` and `native/*.h`.
+/// one of them in the executable whatever order the linker visits archives in. The list is the
+/// `mcdem_*` calls of `native/*.cpp` and `native/*.h`, no more and no fewer (a test checks it).
 fn keep_abi_symbols() {
+    std::hint::black_box(abi_table());
+}
+
+/// The functions of [`keep_abi_symbols`], by name (a test holds the names against `native/`).
+fn abi_table() -> [(&'static str, *const c_void); 15] {
     use crate::ffi::*;
-    let table: [*const c_void; 16] = [
-        mcdem_validate_mc_params as *const c_void,
-        mcdem_pair_coeffs_new as *const c_void,
-        mcdem_check_overlap as *const c_void,
-        mcdem_hertz_normal as *const c_void,
-        mcdem_particle_particle as *const c_void,
-        mcdem_pair_batch_size as *const c_void,
-        mcdem_pair_batch_evaluate as *const c_void,
-        mcdem_radius_changes as *const c_void,
-        mcdem_radius_changes_cached as *const c_void,
-        mcdem_influence_cache_new as *const c_void,
-        mcdem_influence_cache_free as *const c_void,
-        mcdem_last_error as *const c_void,
-        mcdem_setting_name as *const c_void,
-        mcdem_setting_default as *const c_void,
-        mcdem_setting_parse as *const c_void,
-        mcdem_settings_check_wall as *const c_void,
-    ];
-    std::hint::black_box(table);
+    macro_rules! entries {
+        ($($f:ident),* $(,)?) => { [$((stringify!($f), $f as *const c_void)),*] };
+    }
+    entries![
+        mcdem_check_overlap,
+        mcdem_hertz_normal,
+        mcdem_particle_particle,
+        mcdem_pair_batch_size,
+        mcdem_pair_batch_evaluate,
+        mcdem_radius_changes,
+        mcdem_radius_changes_cached,
+        mcdem_influence_cache_new,
+        mcdem_influence_cache_free,
+        mcdem_last_error,
+        mcdem_material_table,
+        mcdem_setting_name,
+        mcdem_setting_default,
+        mcdem_setting_parse,
+        mcdem_settings_check_wall,
+    ]
 }
 
 /// Runs LIGGGHTS on the process's command line (MPI initialised and finalised inside); returns
@@ -198,5 +204,44 @@ impl Drop for Liggghts {
     fn drop(&mut self) {
         // SAFETY: the handle was returned by lammps_open_no_mpi and is closed once.
         unsafe { sys::lammps_close(self.handle) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeSet;
+
+    /// The kept functions are exactly the library functions the shim calls.
+    #[test]
+    fn kept_abi_symbols_are_the_shims_calls() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("native");
+        let mut called = BTreeSet::new();
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let path = e.unwrap().path();
+            let ext = path.extension().and_then(|x| x.to_str());
+            // mcdem.h declares the whole ABI; the shim's own files are the callers.
+            if !matches!(ext, Some("cpp" | "h")) || path.ends_with("mcdem.h") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            for (i, _) in text.match_indices("mcdem_") {
+                let inside_a_word =
+                    text[..i].chars().next_back().is_some_and(|c| c.is_ascii_alphanumeric() || c == '_');
+                if inside_a_word {
+                    continue;
+                }
+                let name: String =
+                    text[i..].chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+                if text[i + name.len()..].starts_with('(') {
+                    called.insert(name);
+                }
+            }
+        }
+        // The shim's own entry point (defined in C++, called from Rust) and a struct's
+        // value-initialisation are not library functions.
+        called.remove("mcdem_liggghts_main");
+        called.remove("mcdem_mc_params");
+        let kept: BTreeSet<String> = super::abi_table().iter().map(|(n, _)| n.to_string()).collect();
+        assert_eq!(kept, called);
     }
 }

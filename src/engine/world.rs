@@ -312,24 +312,10 @@ impl World {
         tangential: Tangential,
     ) -> Result<(), String> {
         let nt = materials.len();
-        if restitution.len() != nt * nt || friction.len() != nt * nt {
-            return Err(format!("peratomtypepair tables must have {nt}×{nt} entries"));
-        }
-        let mut coeffs = Vec::with_capacity(nt * nt);
-        for a in 0..nt {
-            for b in 0..nt {
-                coeffs.push(
-                    PairCoeffs::new(
-                        &materials[a],
-                        &materials[b],
-                        restitution[a * nt + b],
-                        friction[a * nt + b],
-                    )
-                    .map(|c| PairCoeffs { tangential, ..c })
-                    .map_err(|e| format!("types {} and {}: {e}", a + 1, b + 1))?,
-                );
-            }
-        }
+        let coeffs = crate::physics::material::pair_table(&materials, restitution, friction)?
+            .into_iter()
+            .map(|c| PairCoeffs { tangential, ..c })
+            .collect();
         self.ntypes = nt;
         self.materials = materials;
         self.coeffs = coeffs;

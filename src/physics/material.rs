@@ -94,6 +94,44 @@ impl Material {
     }
 }
 
+impl MaterialError {
+    /// The LIGGGHTS `fix property/global` that holds the parameter (what a deck must change).
+    pub fn property(&self) -> &'static str {
+        match self.parameter {
+            "youngs_modulus" => "youngsModulus",
+            "poisson_ratio" => "poissonsRatio",
+            "gamma (geometricPrefactor)" => "geometricPrefactor",
+            "mpr (maxPenetrationRatio)" => "maxPenetrationRatio",
+            other => other,
+        }
+    }
+}
+
+/// The pair coefficients of every ordered pair of `materials` (row a holds a's pairs: entry
+/// a·n + b), from the `peratomtypepair` tables of restitution and friction in the same order.
+/// One builder for both engines: `mcdem run`'s `World::set_materials` and the plugin's material
+/// table (`mcdem_material_table`).
+pub fn pair_table(
+    materials: &[Material],
+    restitution: &[f64],
+    friction: &[f64],
+) -> Result<Vec<PairCoeffs>, String> {
+    let nt = materials.len();
+    if restitution.len() != nt * nt || friction.len() != nt * nt {
+        return Err(format!("peratomtypepair tables must have {nt}×{nt} entries"));
+    }
+    let mut coeffs = Vec::with_capacity(nt * nt);
+    for (a, ma) in materials.iter().enumerate() {
+        for (b, mb) in materials.iter().enumerate() {
+            coeffs.push(
+                PairCoeffs::new(ma, mb, restitution[a * nt + b], friction[a * nt + b])
+                    .map_err(|e| format!("types {} and {}: {e}", a + 1, b + 1))?,
+            );
+        }
+    }
+    Ok(coeffs)
+}
+
 /// The tangential sub-model of a contact (LIGGGHTS `tangential history|no_history`), chosen per
 /// pair table; the forces are [`super::hertz::tangential_history`] and
 /// [`super::hertz::tangential_no_history`].

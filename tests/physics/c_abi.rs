@@ -265,4 +265,54 @@ fn c_abi_error_codes_and_messages() {
     assert_eq!(unsafe { mcdem_influence_cache_recomputed(cache) }, 0);
     unsafe { mcdem_influence_cache_free(cache) };
     unsafe { mcdem_influence_cache_free(std::ptr::null_mut()) };
+
+    // The material table the plugin builds: the pair entries are the one-pair constructor's,
+    // bit for bit, and a bad value names the LIGGGHTS property and the atom type.
+    let (e, nu, g, m) = ([23.3e3, 1e6], [0.5, 0.3], [0.81, 0.0], [0.11, 0.0]);
+    let (rest, fric) = ([0.9, 0.8, 0.8, 0.7], [0.03, 0.1, 0.1, 0.2]);
+    let zero =
+        mcdem_pair_coeffs { e_star: 0.0, g_star: 0.0, beta: 0.0, friction: 0.0, damping_ratio_t_n: 0.0 };
+    let blank = mcdem_mc_params {
+        radius: 0.0,
+        youngs_modulus: 0.0,
+        poisson_ratio: 0.0,
+        gamma: 0.0,
+        mpr: 0.0,
+        cap: 0,
+    };
+    let (mut params, mut coeffs) = ([blank; 2], [zero; 4]);
+    let table = |nu: &[f64; 2], params: &mut [mcdem_mc_params; 2], coeffs: &mut [mcdem_pair_coeffs; 4]| unsafe {
+        mcdem_material_table(
+            2,
+            e.as_ptr(),
+            nu.as_ptr(),
+            g.as_ptr(),
+            m.as_ptr(),
+            MCDEM_CAP_ABS,
+            rest.as_ptr(),
+            fric.as_ptr(),
+            params.as_mut_ptr(),
+            coeffs.as_mut_ptr(),
+        )
+    };
+    assert_eq!(table(&nu, &mut params, &mut coeffs), MCDEM_OK);
+    for (k, got) in coeffs.iter().enumerate() {
+        let (a, b) = (k / 2, k % 2);
+        let mut one = zero;
+        assert_eq!(
+            unsafe { mcdem_pair_coeffs_new(e[a], nu[a], e[b], nu[b], rest[k], fric[k], &mut one) },
+            MCDEM_OK
+        );
+        let bits = |c: &mcdem_pair_coeffs| {
+            [c.e_star, c.g_star, c.beta, c.friction, c.damping_ratio_t_n].map(f64::to_bits)
+        };
+        assert_eq!(bits(got), bits(&one), "type pair {a} {b}");
+    }
+    assert_eq!(
+        (params[1].youngs_modulus, params[1].mpr, params[1].cap, params[1].radius),
+        (1e6, 0.0, MCDEM_CAP_ABS, 1.0)
+    );
+    assert_eq!(unsafe { mcdem_validate_mc_params(&params[0]) }, MCDEM_OK);
+    assert_eq!(table(&[0.5, 0.6], &mut params, &mut coeffs), MCDEM_ERR_PARAMETER);
+    assert!(last().1.starts_with("invalid poissonsRatio for atom type 2"), "{}", last().1);
 }

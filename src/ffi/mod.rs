@@ -15,9 +15,11 @@ use crate::physics::contact_set::{
 use crate::physics::ghods2022::{Cap, MprTest};
 use crate::physics::hertz;
 use crate::physics::material::{check_poisson_ratio, check_youngs_modulus, Material, PairCoeffs};
-use crate::physics::mc_settings::{check_wall, McSetting, MC_SETTINGS};
 use crate::physics::pair::{self, Body, ContactError, ContactForce, PairLanes, WallPoint};
 use crate::physics::Vec3;
+
+mod setup;
+pub use setup::*;
 
 pub const MCDEM_OK: i32 = 0;
 pub const MCDEM_ERR_NULL: i32 = 1;
@@ -35,14 +37,14 @@ thread_local! {
     static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
 }
 
-struct FfiError(i32, String);
+pub(crate) struct FfiError(pub(crate) i32, pub(crate) String);
 
 fn set_error(msg: String) {
     LAST_ERROR.with(|e| *e.borrow_mut() = msg);
 }
 
 /// Runs `f`, turning errors and panics into codes and a stored message.
-fn guard(f: impl FnOnce() -> Result<(), FfiError>) -> i32 {
+pub(crate) fn guard(f: impl FnOnce() -> Result<(), FfiError>) -> i32 {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(())) => MCDEM_OK,
         Ok(Err(FfiError(code, msg))) => {
@@ -56,7 +58,7 @@ fn guard(f: impl FnOnce() -> Result<(), FfiError>) -> i32 {
     }
 }
 
-fn param<E: std::fmt::Display>(e: E) -> FfiError {
+pub(crate) fn param<E: std::fmt::Display>(e: E) -> FfiError {
     FfiError(MCDEM_ERR_PARAMETER, e.to_string())
 }
 
@@ -69,12 +71,12 @@ fn contact_err(e: ContactError) -> FfiError {
     FfiError(code, e.to_string())
 }
 
-fn non_null<'a, T>(p: *const T, name: &str) -> Result<&'a T, FfiError> {
+pub(crate) fn non_null<'a, T>(p: *const T, name: &str) -> Result<&'a T, FfiError> {
     // SAFETY: the caller promises a valid pointer or null; null is rejected here.
     unsafe { p.as_ref() }.ok_or_else(|| FfiError(MCDEM_ERR_NULL, format!("{name} is a null pointer")))
 }
 
-fn non_null_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, FfiError> {
+pub(crate) fn non_null_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, FfiError> {
     // SAFETY: as above, for an exclusive pointer.
     unsafe { p.as_mut() }.ok_or_else(|| FfiError(MCDEM_ERR_NULL, format!("{name} is a null pointer")))
 }
@@ -572,69 +574,6 @@ pub unsafe extern "C" fn mcdem_particle_wall(
         sh.copy_from_slice(s.as_slice());
         write_contact(out, r);
         Ok(())
-    })
-}
-
-/// Keyword of setting `k` of `model mc_advanced` (`MCDEM_SETTING_*`, `physics::mc_settings`), a
-/// static NUL-terminated string; null when `k` is not a setting (the shim loops until it is).
-#[no_mangle]
-pub extern "C" fn mcdem_setting_name(k: i32) -> *const c_char {
-    McSetting::from_index(k).map_or(std::ptr::null(), |s| s.c_name().as_ptr())
-}
-
-/// Value of setting `k` when the deck line does not give it (NaN when `k` is not a setting).
-#[no_mangle]
-pub extern "C" fn mcdem_setting_default(k: i32) -> f64 {
-    McSetting::from_index(k).map_or(f64::NAN, McSetting::default_value)
-}
-
-fn setting(k: i32) -> Result<McSetting, FfiError> {
-    McSetting::from_index(k).ok_or_else(|| param(format!("no model setting with index {k}")))
-}
-
-/// Reads the deck word after keyword `k` into `*value` (a choice as 0 or 1); on a bad word
-/// `MCDEM_ERR_PARAMETER` with the message both engines print, naming keyword, word and what is
-/// expected.
-/// # Safety
-/// `word` must be null (rejected) or a NUL-terminated string; `value` null (rejected) or valid.
-#[no_mangle]
-pub unsafe extern "C" fn mcdem_setting_parse(k: i32, word: *const c_char, value: *mut f64) -> i32 {
-    guard(|| {
-        let s = setting(k)?;
-        let word = non_null(word, "word")?;
-        // SAFETY: non-null, NUL-terminated by the caller's promise.
-        let word = unsafe { std::ffi::CStr::from_ptr(word) }.to_string_lossy();
-        *non_null_mut(value, "value")? = s.parse(&word).map_err(param)?;
-        Ok(())
-    })
-}
-
-/// Checks a wall's settings against the pair style's (`MCDEM_SETTINGS` entries each; `given[k]`
-/// non-zero when the wall line gave setting `k`): `MCDEM_ERR_PARAMETER` naming the first shared
-/// setting that differs.
-/// # Safety
-/// Each pointer must be null (rejected) or valid for `MCDEM_SETTINGS` elements.
-#[no_mangle]
-pub unsafe extern "C" fn mcdem_settings_check_wall(
-    wall: *const f64,
-    given: *const u8,
-    pair: *const f64,
-) -> i32 {
-    guard(|| {
-        let n = MC_SETTINGS.len();
-        let (wall, given, pair) =
-            (non_null(wall, "wall")?, non_null(given, "given")?, non_null(pair, "pair")?);
-        // SAFETY: each holds MCDEM_SETTINGS elements by the caller's promise.
-        let (wall, given, pair) = unsafe {
-            (
-                std::slice::from_raw_parts(wall, n),
-                std::slice::from_raw_parts(given, n),
-                std::slice::from_raw_parts(pair, n),
-            )
-        };
-        let arr = |x: &[f64]| -> [f64; 4] { std::array::from_fn(|k| x[k]) };
-        let given: [bool; 4] = std::array::from_fn(|k| given[k] != 0);
-        check_wall(&arr(wall), &given, &arr(pair)).map_err(param)
     })
 }
 
