@@ -5,8 +5,9 @@
 use faer::sparse::Triplet;
 
 use super::constitutive::{det, Mat};
+use super::grid::incremental_gradient;
 use super::grid::Stencil;
-use super::implicit::{incremental_gradient, DofState, Workspace};
+use super::implicit::{DofState, Workspace};
 use super::points::Points;
 
 /// Per-point and per-cell quantities of F-bar at the trial displacement (see [`Locking::FBar`]).
