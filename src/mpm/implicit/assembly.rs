@@ -252,7 +252,8 @@ pub(in crate::mpm) fn factorize<const D: usize>(
     }
     let n = Stencil::<D>::LEN;
     if locking == Locking::FBar {
-        fbar_stiffness(pts, ws);
+        let free_row = |r: usize| ws.state[r] == DofState::Free;
+        fbar_stiffness(pts, &ws.fbar, &ws.stencils, &ws.dof_of, &ws.tangent, free_row, &mut ws.trip);
     }
     for (p, st) in ws.stencils.iter().enumerate() {
         if locking == Locking::FBar {
