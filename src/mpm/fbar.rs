@@ -1,15 +1,15 @@
 //! F-bar against volumetric locking (de Souza Neto, Perić, Dunne & Owen 1996, Int. J. Solids
 //! Struct. 33, 3277–3296): the per-cell state at a trial displacement and the exact Hessian of the
-//! F-bar energy (see [`super::implicit::Locking::FBar`]).
+//! F-bar energy (`Locking::FBar` of the implicit step). It reads the implicit step's state only
+//! through its arguments, so the step's module uses this one and not the other way round.
 
 use faer::sparse::Triplet;
 
-use super::constitutive::{det, Mat};
-use super::grid::Stencil;
-use super::implicit::{incremental_gradient, DofState, Workspace};
+use super::constitutive::{det, Mat, Tangent};
+use super::grid::{incremental_gradient, Stencil};
 use super::points::Points;
 
-/// Per-point and per-cell quantities of F-bar at the trial displacement (see [`Locking::FBar`]).
+/// Per-point and per-cell quantities of F-bar at the trial displacement.
 #[derive(Clone, Debug, Default)]
 pub(super) struct FBarState<const D: usize> {
     /// Points sorted by cell, and the start of each cell's run in `order` (plus the end).
@@ -97,11 +97,20 @@ impl<const D: usize> FBarState<D> {
 /// corner, δF_p = e_k ⊗ G_p (G_p = F_p(t)ᵀ ∇N), and with a = F⁻ᵀ : δF = δJ/J, ā = δJ̄/J̄:
 /// δF̄ = s δF + F̄ (ā − a)/D, δP̄ = A(F̄) : δF̄, δτ = (δP̄ : F̄ + P̄ : δF̄)/D, δτ̄ = V⁰-mean of δτ,
 /// δP_eff = δs P̄ + s δP̄ − F⁻ᵀ δFᵀ F⁻ᵀ c + F⁻ᵀ (δτ̄ J/J̄ + τ̄ (J/J̄)(a − ā) − δτ),
-/// with δs = s (ā − a)/D and c = τ̄ J/J̄ − τ. Rows of bound dofs are skipped (identity rows).
-pub(super) fn fbar_stiffness<const D: usize>(pts: &Points<D>, ws: &mut Workspace<D>) {
+/// with δs = s (ā − a)/D and c = τ̄ J/J̄ − τ. `stencils`, `dof_of` and `tangent` (A = ∂P/∂F at F̄)
+/// are the step's per point and per node data; rows for which `free_row` is false (bound or
+/// prescribed dofs, identity rows) are skipped.
+pub(super) fn fbar_stiffness<const D: usize>(
+    pts: &Points<D>,
+    fb: &FBarState<D>,
+    stencils: &[Stencil<D>],
+    dof_of: &[usize],
+    tangent: &[Tangent<D>],
+    free_row: impl Fn(usize) -> bool,
+    trip: &mut Vec<Triplet<usize, usize, f64>>,
+) {
     let n = Stencil::<D>::LEN;
     let dd = D as f64;
-    let fb = &ws.fbar;
     let mut dfb: Vec<Mat<D>> = Vec::new();
     let mut dpb: Vec<Mat<D>> = Vec::new();
     let mut a_p: Vec<f64> = Vec::new();
@@ -109,17 +118,17 @@ pub(super) fn fbar_stiffness<const D: usize>(pts: &Points<D>, ws: &mut Workspace
     for c in 0..fb.start.len() - 1 {
         let cell = &fb.order[fb.start[c]..fb.start[c + 1]];
         let (jbar, taubar, v0) = (fb.jbar[c], fb.taubar[c], fb.vol0[c]);
-        let nodes = ws.stencils[cell[0]].nodes;
+        let nodes = stencils[cell[0]].nodes;
         dfb.resize(cell.len(), Mat::<D>::zeros());
         dpb.resize(cell.len(), Mat::<D>::zeros());
         a_p.resize(cell.len(), 0.0);
         dtau.resize(cell.len(), 0.0);
         for cb in 0..n {
-            let rb = ws.dof_of[nodes[cb]];
+            let rb = dof_of[nodes[cb]];
             for k in 0..D {
                 // δF_p = e_k ⊗ G_p: row k of δF is G_p.
                 let df = |p: usize| {
-                    let g = pts.f[p].transpose() * ws.stencils[p].grad[cb];
+                    let g = pts.f[p].transpose() * stencils[p].grad[cb];
                     let mut m = Mat::<D>::zeros();
                     for l in 0..D {
                         m[(k, l)] = g[l];
@@ -136,7 +145,7 @@ pub(super) fn fbar_stiffness<const D: usize>(pts: &Points<D>, ws: &mut Workspace
                 for (q, &p) in cell.iter().enumerate() {
                     let dfp = df(p);
                     dfb[q] = dfp * fb.s[p] + fb.fb[p] * ((abar - a_p[q]) / dd);
-                    let a4 = &ws.tangent[p];
+                    let a4 = &tangent[p];
                     dpb[q] = Mat::<D>::from_fn(|i, jj| {
                         let mut v = 0.0;
                         for kk in 0..D {
@@ -157,15 +166,15 @@ pub(super) fn fbar_stiffness<const D: usize>(pts: &Points<D>, ws: &mut Workspace
                     let cc = taubar * j / jbar - fb.tau[p];
                     let dpe = fb.pb[p] * ds + dpb[q] * s - fit * dfp.transpose() * fit * cc
                         + fit * (dtaubar * j / jbar + taubar * (j / jbar) * (a_p[q] - abar) - dtau[q]);
-                    let st = &ws.stencils[p];
+                    let st = &stencils[p];
                     let ft = pts.f[p].transpose();
                     for ca in 0..n {
-                        let ra = ws.dof_of[nodes[ca]];
+                        let ra = dof_of[nodes[ca]];
                         let f = dpe * (ft * st.grad[ca]) * pts.vol0[p];
                         for i in 0..D {
                             let row = ra * D + i;
-                            if ws.state[row] == DofState::Free {
-                                ws.trip.push(Triplet::new(row, rb * D + k, f[i]));
+                            if free_row(row) {
+                                trip.push(Triplet::new(row, rb * D + k, f[i]));
                             }
                         }
                     }

@@ -4,7 +4,7 @@
 //! The grid is the MPM's computational mesh (Nezamabadi et al. 2019, Section 2): N_p and G_p of
 //! Eq. 4 are the values and gradients returned by [`Grid::stencil`].
 
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 
 /// A point of the space.
 pub type Vector<const D: usize> = SVector<f64, D>;
@@ -146,4 +146,22 @@ impl<const D: usize> Grid<D> {
         }
         Some(st)
     }
+}
+
+/// ΔF_p = I + Σ_I u_I ⊗ ∇N_I(x_p).
+pub fn incremental_gradient<const D: usize>(
+    st: &Stencil<D>,
+    dof_of: &[usize],
+    u: &[f64],
+) -> SMatrix<f64, D, D> {
+    let mut df = SMatrix::<f64, D, D>::identity();
+    for c in 0..Stencil::<D>::LEN {
+        let a = dof_of[st.nodes[c]];
+        for i in 0..D {
+            for j in 0..D {
+                df[(i, j)] += u[a * D + i] * st.grad[c][j];
+            }
+        }
+    }
+    df
 }

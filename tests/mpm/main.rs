@@ -5,3 +5,4 @@
 mod closed_forms;
 mod compaction;
 mod contact;
+mod disc_plates;

@@ -1,5 +1,7 @@
 //! Unit tests of the implicit step: derivatives of the potential, the modified Newton increment.
 
+use super::assembly::{assemble_and_solve, evaluate, potential};
+use super::newton::descending_increment;
 use super::*;
 use crate::mpm::constitutive::NeoHookean;
 
