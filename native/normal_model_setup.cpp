@@ -78,6 +78,11 @@ void NormalModel<MC_ADVANCED>::registerSettings(Settings &settings) {
         table["updateEvery"] =
             new StrictSetting<int, parse_step_count>("updateEvery", &update_every_, &given_[kUpdateEvery],
                                                     "a whole number of steps from 1 to 1000000000");
+    // The accuracy budget runs in `mcdem run` only (its per-particle references live in the Rust
+    // engine's multi-contact pass, not in the C ABI the plugin calls).
+    const char *budget = "the accuracy budget runs in `mcdem run` only; use geometryTolerance/updateEvery here";
+    for (const char *key : {"mcAccuracy", "mcAccuracyCheck"})
+        if (table.find(key) == table.end()) table[key] = new UnsupportedSetting(key, budget);
 }
 
 void NormalModel<MC_ADVANCED>::postSettings(IContactHistorySetup *, ContactModelBase *) {

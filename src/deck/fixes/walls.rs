@@ -154,7 +154,7 @@ impl Deck {
         m.check()?;
         // The wall runs the pair style's model: the same law and sub-models. The pair style's
         // multi-contact pass serves the walls too, so a wall may repeat its mprTest,
-        // geometryTolerance and updateEvery but not give other values (they would be ignored);
+        // geometryTolerance, updateEvery, mcAccuracy and mcAccuracyCheck but not give other values (they would be ignored);
         // pairRadii concerns pairs only.
         let Some(p) = &self.pair else { return Err("fix wall/gran before pair_style gran".into()) };
         // Three differences are allowed, as LIGGGHTS runs them: a wall may leave out the pair
@@ -184,6 +184,8 @@ impl Deck {
             ("mprTest", p.mpr_test == m.mpr_test),
             ("geometryTolerance", p.geometry_tolerance.unwrap_or(0.0) == m.geometry_tolerance.unwrap_or(0.0)),
             ("updateEvery", p.update_every.unwrap_or(1) == m.update_every.unwrap_or(1)),
+            ("mcAccuracy", p.mc_accuracy.unwrap_or(0.0) == m.mc_accuracy.unwrap_or(0.0)),
+            ("mcAccuracyCheck", p.mc_accuracy_check.unwrap_or(false) == m.mc_accuracy_check.unwrap_or(false)),
         ];
         for (key, same) in agrees {
             if let (Some(x), false) = (given(key), same) {
