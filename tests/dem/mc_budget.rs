@@ -216,3 +216,37 @@ fn bad_accuracy_settings_are_named() {
         super::deck::run_deck(&(super::deck::BASE.to_string() + "run 1\n"), &["--mc-accuracy", "1e-3"]);
     assert!(!ok && out.contains("--mc-accuracy and --mc-accuracy-check apply to model mc_advanced only; this pair style is model hertz"), "{out}");
 }
+
+/// The budget's decisions are per particle, so the threaded pass (particles split between the two
+/// members) gives the serial run's bits: one fast stroke of the 514-particle hydrogel compression.
+#[test]
+fn the_budget_gives_the_same_bits_on_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let force = |mode: &str| {
+        let out = dir.path().join(format!("piston_{mode}.txt"));
+        let o = Command::new(env!("CARGO_BIN_EXE_mcdem"))
+            .current_dir(dir.path())
+            .env("RAYON_NUM_THREADS", "2")
+            .arg("run")
+            .arg(decks().join("hydrogel.in"))
+            .args([
+                "-var", "law", "0", "-var", "stroke", "3000", "-var", "strokes", "1", "-var", "every", "10",
+            ])
+            .args(["-var", "dir"])
+            .arg(decks())
+            .args(["-var", "out"])
+            .arg(&out)
+            .args(["-log", "none", "--no-progress", "--mc-accuracy", "1e-2", "--threads-mode", mode])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(o.status.success(), "{text}");
+        (std::fs::read_to_string(out).unwrap(), text)
+    };
+    let ((serial, _), (parallel, text)) = (force("serial"), force("parallel"));
+    assert!(text.contains("threaded in 100 %"), "{text}");
+    assert!(
+        serial.lines().count() > 300 && serial == parallel,
+        "the piston force differs between serial and threaded runs"
+    );
+}
