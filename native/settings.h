@@ -34,6 +34,23 @@ private:
     bool *given_;
 };
 
+// A keyword of `mcdem run`'s model mc_advanced that the plugin does not implement (`mcAccuracy`,
+// `mcAccuracyCheck`): stops the deck with a message naming it, rather than LIGGGHTS's generic
+// unknown-keyword error or, worse, running without the setting.
+class UnsupportedSetting : public Setting {
+public:
+    UnsupportedSetting(const char *name, const char *why) : Setting(name, 1), why_(why) {}
+    int parseArguments(char **args) {
+        if (name != args[0]) return 0;
+        error_message = "model mc_advanced: " + name + " is not implemented in the LIGGGHTS plugin (" + why_ + ")";
+        return -1;
+    }
+    void print_value(FILE *out) { std::fprintf(out, "-"); }
+
+private:
+    std::string why_;
+};
+
 }  // namespace mcdem_shim
 
 #endif

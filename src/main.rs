@@ -43,6 +43,15 @@ enum Command {
         /// 1 = every step, exact; an approximation that trades accuracy for speed, see docs/dem.md)
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..=mcdem::deck::MAX_UPDATE_EVERY))]
         mc_update_every: Option<u64>,
+        /// Multi-contact accuracy budget EPS (overrides the deck's `mcAccuracy`): each particle
+        /// reuses its last exact Eq. 2 radius changes while a bound on their error stays below
+        /// EPS times their size (0 = exact; see docs/dem.md "Accuracy budget")
+        #[arg(long)]
+        mc_accuracy: Option<f64>,
+        /// Every K steps, compute the exact radius changes as a shadow (not used for the forces)
+        /// and report the measured error next to the bound (overrides `mcAccuracyCheck`)
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        mc_accuracy_check: Option<u64>,
         /// Whether a step's force passes use both threads of the pool: `auto` (default) times
         /// windows of steps each way every 5000 steps (sooner after it chose one core) and keeps
         /// the faster; `serial` and `parallel` fix the choice. Results are bit-identical in all
@@ -378,15 +387,34 @@ struct RunFlags {
     no_progress: bool,
     mc_geometry_tolerance: f64,
     mc_update_every: Option<u64>,
+    mc_accuracy: Option<f64>,
+    mc_accuracy_check: Option<u64>,
     threads_mode: ThreadsMode,
 }
 
 fn run(deck: PathBuf, var: Vec<String>, log: Option<PathBuf>, flags: RunFlags) -> Result<(), String> {
-    let RunFlags { no_progress, mc_geometry_tolerance, mc_update_every, threads_mode } = flags;
+    let RunFlags {
+        no_progress,
+        mc_geometry_tolerance,
+        mc_update_every,
+        mc_accuracy,
+        mc_accuracy_check,
+        threads_mode,
+    } = flags;
     if !(mc_geometry_tolerance.is_finite() && mc_geometry_tolerance >= 0.0) {
         return Err(format!(
             "ERROR: --mc-geometry-tolerance must be a finite number >= 0 (a fraction of the particle radius), got {mc_geometry_tolerance}"
         ));
+    }
+    if let Some(eps) = mc_accuracy {
+        if !(eps.is_finite() && eps >= 0.0) {
+            return Err(format!(
+                "ERROR: --mc-accuracy must be a finite number >= 0 (the relative error budget of the multi-contact corrections; 0 = exact), got {eps}"
+            ));
+        }
+        if eps > 0.0 && (mc_geometry_tolerance > 0.0 || mc_update_every.is_some_and(|k| k > 1)) {
+            return Err("ERROR: --mc-accuracy cannot be combined with --mc-geometry-tolerance or --mc-update-every: the accuracy budget decides per particle and step when Eq. 2 is recomputed".into());
+        }
     }
     let vars = var.chunks(2).map(|c| (c[0].clone(), c[1].clone())).collect();
     let opts = mcdem::deck::Options {
@@ -396,6 +424,8 @@ fn run(deck: PathBuf, var: Vec<String>, log: Option<PathBuf>, flags: RunFlags) -
         quiet: false,
         mc_geometry_tolerance,
         mc_every: mc_update_every.unwrap_or(0),
+        mc_accuracy,
+        mc_accuracy_check,
         pair_threads: match threads_mode {
             ThreadsMode::Auto => mcdem::engine::PairThreads::Auto,
             ThreadsMode::Serial => mcdem::engine::PairThreads::Serial,
@@ -561,9 +591,18 @@ fn main() -> ExitCode {
             no_progress,
             mc_geometry_tolerance,
             mc_update_every,
+            mc_accuracy,
+            mc_accuracy_check,
             threads_mode,
         } => {
-            let opts = RunFlags { no_progress, mc_geometry_tolerance, mc_update_every, threads_mode };
+            let opts = RunFlags {
+                no_progress,
+                mc_geometry_tolerance,
+                mc_update_every,
+                mc_accuracy,
+                mc_accuracy_check,
+                threads_mode,
+            };
             rayon::scope(|_| run(deck, var, log, opts))
         }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),

@@ -7,6 +7,7 @@
 
 mod atom_vars;
 mod atoms;
+mod budget_report;
 mod commands;
 pub mod data_file;
 mod dumps;
@@ -63,6 +64,10 @@ pub struct Options {
     pub mc_geometry_tolerance: f64,
     /// Multi-contact update interval ([`crate::engine::World::mc_every`]; 0 = the deck's, else 1).
     pub mc_every: u64,
+    /// Multi-contact accuracy budget ([`crate::engine::World::mc_accuracy`]; `None`: the deck's).
+    pub mc_accuracy: Option<f64>,
+    /// Shadow check interval of the budget ([`crate::engine::World::mc_accuracy_check`]; `None`: the deck's).
+    pub mc_accuracy_check: Option<u64>,
 }
 
 /// Runs a deck file. Errors come back as `FILE:LINE: message`.
@@ -124,6 +129,8 @@ pub struct RunSummary {
     pub particle_steps: f64,
     pub loop_seconds: f64,
     pub neighbor_builds: u64,
+    /// The multi-contact accuracy budget over the run (all zero without `mcAccuracy`).
+    pub mc_budget: crate::engine::BudgetStats,
 }
 
 #[derive(Debug, Clone)]
@@ -231,6 +238,8 @@ struct Deck {
     /// Multi-contact approximations given on the command line (they override the deck's; 0: none).
     cli_geometry_tolerance: f64,
     cli_mc_every: u64,
+    cli_mc_accuracy: Option<f64>,
+    cli_mc_accuracy_check: Option<u64>,
     summary: RunSummary,
     line_no: usize,
     /// The deck file being read (for `FILE:LINE` in warnings).
@@ -319,6 +328,8 @@ impl Deck {
             quiet: opts.quiet,
             cli_geometry_tolerance: opts.mc_geometry_tolerance,
             cli_mc_every: opts.mc_every,
+            cli_mc_accuracy: opts.mc_accuracy,
+            cli_mc_accuracy_check: opts.mc_accuracy_check,
             summary: RunSummary::default(),
             line_no: 0,
             file: String::new(),

@@ -2,6 +2,7 @@
 //! closure built from the `fix property/global` values when a run starts.
 
 use super::*;
+use crate::engine::DEFAULT_CHECK_EVERY;
 use crate::physics::mc_settings::{self, McSetting};
 
 /// The normal contact law a `model` keyword names: parsed once, so every later decision is a
@@ -55,6 +56,10 @@ pub(super) struct GranModel {
     pub(super) geometry_tolerance: Option<f64>,
     /// `updateEvery K` (mc_advanced): see `World::mc_every`.
     pub(super) update_every: Option<u64>,
+    /// `mcAccuracy EPS` (mc_advanced): see `World::mc_accuracy`.
+    pub(super) mc_accuracy: Option<f64>,
+    /// `mcAccuracyCheck yes|no` (mc_advanced with mcAccuracy): see `World::mc_accuracy_check`.
+    pub(super) mc_accuracy_check: Option<bool>,
     /// `tangential_damping on|off` (on by default, as in LIGGGHTS); off only with model hooke.
     pub(super) tangential_damping: bool,
     /// `limitForce on|off` (model hooke; off by default).
@@ -105,6 +110,12 @@ impl GranModel {
                     McSetting::UpdateEvery => self.update_every = Some(v as u64),
                 }
             }
+            ("mcAccuracy", Some(x)) => self.mc_accuracy = Some(mc_accuracy(x)?),
+            ("mcAccuracyCheck", Some("yes")) => self.mc_accuracy_check = Some(true),
+            ("mcAccuracyCheck", Some("no")) => self.mc_accuracy_check = Some(false),
+            ("mcAccuracyCheck", Some(x)) => {
+                return Err(format!("mcAccuracyCheck must be 'yes' or 'no', got '{x}'"))
+            }
             ("tangential_damping", Some(x)) => self.tangential_damping = on_off(key, x)?,
             ("limitForce", Some(x)) => self.limit_force = on_off(key, x)?,
             ("ktToKnUser", Some(x)) => self.kt_to_kn = on_off(key, x)?,
@@ -137,6 +148,32 @@ impl GranModel {
         }
         if self.update_every.is_some() && !advanced {
             return Err("updateEvery is a setting of model mc_advanced".into());
+        }
+        if self.mc_accuracy.is_some() && !advanced {
+            return Err(format!(
+                "mcAccuracy is a setting of model mc_advanced: model {} has no multi-contact correction to budget",
+                self.name()
+            ));
+        }
+        if self.mc_accuracy_check.is_some() && !advanced {
+            return Err("mcAccuracyCheck is a setting of model mc_advanced".into());
+        }
+        if self.mc_accuracy.is_some() {
+            for (given, key) in [
+                (self.geometry_tolerance.is_some(), "geometryTolerance"),
+                (self.update_every.is_some(), "updateEvery"),
+            ] {
+                if given {
+                    return Err(format!(
+                        "mcAccuracy and {key} cannot be combined: the accuracy budget decides per particle and step when Eq. 2 is recomputed; drop {key}"
+                    ));
+                }
+            }
+        }
+        if self.mc_accuracy_check == Some(true) && self.mc_accuracy.is_none_or(|e| e == 0.0) {
+            return Err(
+                "mcAccuracyCheck yes needs mcAccuracy EPS > 0 (EPS = 0 is exact: nothing to check)".into()
+            );
         }
         if self.tangential_reduce && !self.cohesion {
             return Err("tangential_reduce is a setting of cohesion sjkr".into());
@@ -222,6 +259,16 @@ impl GranModel {
     }
 }
 
+/// `mcAccuracy` value: a finite number ≥ 0 (the accuracy budget EPS; 0 is exact).
+pub(super) fn mc_accuracy(x: &str) -> R<f64> {
+    match x.parse::<f64>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
+        _ => Err(format!(
+            "mcAccuracy must be a finite number >= 0 (the relative error budget of the multi-contact corrections; 0 = exact), got '{x}'"
+        )),
+    }
+}
+
 /// Largest `updateEvery` (both engines; the plugin keeps it in an `int`).
 pub use crate::physics::mc_settings::MAX_UPDATE_EVERY;
 
@@ -235,6 +282,8 @@ impl Deck {
             stock_pair_radii: false,
             geometry_tolerance: None,
             update_every: None,
+            mc_accuracy: None,
+            mc_accuracy_check: None,
             tangential_damping: true,
             limit_force: false,
             kt_to_kn: false,
@@ -294,10 +343,30 @@ impl Deck {
                 m.name()
             ));
         }
+        let (cli_eps, cli_check) = (self.cli_mc_accuracy, self.cli_mc_accuracy_check);
+        if !m.is_mc_advanced() && (cli_eps.is_some() || cli_check.is_some()) {
+            return Err(format!(
+                "--mc-accuracy and --mc-accuracy-check apply to model mc_advanced only; this pair style is model {} (no multi-contact correction)",
+                m.name()
+            ));
+        }
         // A pair style defined again starts from the defaults, as in LIGGGHTS.
         self.world.mc_geometry_tolerance =
             if cli_tol > 0.0 { cli_tol } else { m.geometry_tolerance.unwrap_or(0.0) };
         self.world.mc_every = if cli_every > 0 { cli_every } else { m.update_every.unwrap_or(1) };
+        let eps = cli_eps.or(m.mc_accuracy).unwrap_or(0.0);
+        if eps > 0.0 && (self.world.mc_geometry_tolerance > 0.0 || self.world.mc_every > 1) {
+            return Err(
+                "mcAccuracy (or --mc-accuracy) cannot be combined with geometryTolerance or updateEvery (or their command-line options): the accuracy budget decides per particle and step when Eq. 2 is recomputed".into(),
+            );
+        }
+        let deck_check = if m.mc_accuracy_check == Some(true) { DEFAULT_CHECK_EVERY } else { 0 };
+        let check = cli_check.unwrap_or(deck_check);
+        if check > 0 && eps == 0.0 {
+            return Err("mcAccuracyCheck (or --mc-accuracy-check) needs mcAccuracy EPS > 0 (EPS = 0 is exact: nothing to check)".into());
+        }
+        self.world.mc_accuracy = eps;
+        self.world.mc_accuracy_check = check;
         self.pair = Some(m);
         Ok(())
     }

@@ -176,6 +176,8 @@ impl Deck {
         let passes0 = self.world.mc_updates;
         let threaded0 = self.world.threaded_passes();
         let kernel0 = (self.world.mc_kernel_contacts, self.world.mc_kernel_fallbacks);
+        // The budget's counters from here on (the set-up pass is not a step of the run).
+        self.world.take_budget_stats();
         while self.world.step < end {
             // An `insert_every N` insertion: the new particles enter as at the start of a run
             // (box, lists and forces set up again), without a new thermo header.
@@ -237,6 +239,9 @@ impl Deck {
                 self.world.mc_every,
                 self.world.mc_updates - passes0
             );
+        }
+        if self.world.mc_accuracy > 0.0 {
+            approx += &self.budget_summary(nsteps, np);
         }
         // One process, a thread pool inside it: say how many threads the force passes could use
         // and how often they did (the engine times steps with and without its threads and keeps

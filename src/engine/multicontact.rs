@@ -13,6 +13,7 @@ use crate::physics::{Material, Vec3};
 use crate::team::{SplitMut, Team};
 
 use super::contacts::{Pair, PairHist};
+use super::mc_budget::{BudgetParams, Decision, KeptExact};
 use super::particles::Particles;
 use super::{Domain, StepError, World};
 
@@ -43,6 +44,12 @@ pub(super) struct McState {
     /// Geometry tolerance: the kept influence matrices, one per particle.
     pub(super) mc_cache: Option<InfluenceCache>,
     pub(super) pair_mc: Vec<bool>,
+    /// Accuracy budget: per particle, the reference of its last exact Eq. 2 evaluation.
+    pub(super) budget: Vec<KeptExact>,
+    /// Accuracy budget: what it did since the counters were last read.
+    pub(super) budget_stats: super::mc_budget::BudgetStats,
+    /// Shadow check: this step's exact radius changes per slot (scratch).
+    pub(super) shadow_dr: Vec<f64>,
 }
 
 /// Per-type MC kernel parameters without the radius (filled in per particle).
@@ -60,6 +67,10 @@ pub(super) struct McCounts {
     pub(super) contacts: u64,
     pub(super) fallbacks: u64,
     pub(super) recomputed: u64,
+    /// Accuracy budget: particles with two or more contacts (evaluated or reused).
+    pub(super) multi: u64,
+    /// Accuracy budget: largest bound / (EPS × scale) of a reused result.
+    pub(super) worst: f64,
 }
 
 impl World {
@@ -185,6 +196,7 @@ impl World {
             slot_start: &self.multi.slot_start,
             loads: &self.multi.slot_loads,
             step: self.step,
+            accuracy: self.mc_accuracy,
         };
         let (tolerance, kept) = match self.multi.mc_cache.as_mut() {
             Some(c) => {
@@ -193,14 +205,30 @@ impl World {
             }
             None => (0.0, None),
         };
+        // EPS = 0 leaves the budget out entirely: the exact pass, bit for bit.
+        let budget = if self.mc_accuracy > 0.0 {
+            self.multi.budget.resize_with(n, Default::default);
+            Some(&mut self.multi.budget[..n])
+        } else {
+            None
+        };
         let counts = match self.blocks.team.as_ref().filter(|_| threaded) {
-            Some(team) => ctx.kernel_on(team, &mut self.multi.slot_dr, kept, tolerance)?,
-            None => ctx.kernel(0, n, &mut self.multi.slot_dr, kept, tolerance)?,
+            Some(team) => ctx.kernel_on(team, &mut self.multi.slot_dr, kept, tolerance, budget)?,
+            None => ctx.kernel(0, n, &mut self.multi.slot_dr, kept, tolerance, budget)?,
         };
         self.mc_kernel_contacts += counts.contacts;
         self.mc_kernel_fallbacks += counts.fallbacks;
         if let Some(c) = self.multi.mc_cache.as_mut() {
             c.recomputed += counts.recomputed;
+        }
+        if self.mc_accuracy > 0.0 {
+            let st = &mut self.multi.budget_stats;
+            st.multi += counts.multi;
+            st.recomputed += counts.recomputed;
+            st.worst_bound = st.worst_bound.max(counts.worst);
+            if self.mc_accuracy_check > 0 && self.step % self.mc_accuracy_check == 0 {
+                self.shadow_check()?;
+            }
         }
         let m = &self.multi;
         let (dr, pair_dr) = (&m.slot_dr, SplitMut::new(&mut self.contacts.pair_dr));
@@ -281,6 +309,8 @@ pub(super) struct McCtx<'a> {
     /// Per slot: contact point and previous force (see [`McState::slot_loads`]).
     pub(super) loads: &'a [ContactLoad],
     pub(super) step: u64,
+    /// Accuracy budget EPS (0: exact).
+    pub(super) accuracy: f64,
 }
 
 impl McCtx<'_> {
@@ -294,6 +324,7 @@ impl McCtx<'_> {
         dr: &mut [f64],
         kept: Option<&mut [KeptInfluence]>,
         tolerance: f64,
+        budget: Option<&mut [KeptExact]>,
     ) -> Result<McCounts, StepError> {
         let n = self.slot_start.len() - 1;
         let (size, total) = (team.size(), self.slot_start[n] as usize);
@@ -305,19 +336,27 @@ impl McCtx<'_> {
                 self.slot_start[..n].partition_point(|&s| (s as usize) * size < k * total)
             }
         };
-        let (dr, kept) = (SplitMut::new(dr), kept.map(SplitMut::new));
+        let (dr, kept, budget) = (SplitMut::new(dr), kept.map(SplitMut::new), budget.map(SplitMut::new));
         let counts = Mutex::new(McCounts::default());
         team.run(|k| {
             let (lo, hi) = (cut(k), cut(k + 1));
             let slots = self.slot_start[lo] as usize..self.slot_start[hi] as usize;
             // SAFETY: `cut` does not decrease with k, so the members' particle ranges lo..hi are
-            // disjoint, and with them their slots and kept matrices.
-            let (d, kp) = unsafe { (dr.range(slots), kept.as_ref().map(|v| v.range(lo..hi))) };
-            let c = self.kernel(lo, hi, d, kp, tolerance)?;
+            // disjoint, and with them their slots, kept matrices and budget references.
+            let (d, kp, bu) = unsafe {
+                (
+                    dr.range(slots),
+                    kept.as_ref().map(|v| v.range(lo..hi)),
+                    budget.as_ref().map(|v| v.range(lo..hi)),
+                )
+            };
+            let c = self.kernel(lo, hi, d, kp, tolerance, bu)?;
             let mut sum = counts.lock().unwrap_or_else(|p| p.into_inner());
             sum.contacts += c.contacts;
             sum.fallbacks += c.fallbacks;
             sum.recomputed += c.recomputed;
+            sum.multi += c.multi;
+            sum.worst = sum.worst.max(c.worst);
             Ok(())
         })?;
         Ok(counts.into_inner().unwrap_or_else(|p| p.into_inner()))
@@ -333,11 +372,13 @@ impl McCtx<'_> {
         dr: &mut [f64],
         kept: Option<&mut [KeptInfluence]>,
         tolerance: f64,
+        budget: Option<&mut [KeptExact]>,
     ) -> Result<McCounts, StepError> {
         MC_SCRATCH.with(|buf| {
             let fb_buf = &mut *buf.borrow_mut();
             let mut counts = McCounts::default();
             let mut kept = kept;
+            let mut budget = budget;
             let base = self.slot_start[lo] as usize;
             for i in lo..hi {
                 let (s0, s1) = (self.slot_start[i] as usize, self.slot_start[i + 1] as usize);
@@ -361,6 +402,27 @@ impl McCtx<'_> {
                 }
                 // The particle's slots are its contacts in order: Δ goes straight into them.
                 let fb = &mut fb_buf[..nl];
+                if let Some(b) = budget.as_deref_mut() {
+                    // The accuracy budget: reuse the reference while its bound stays in budget.
+                    let (bp, k) = (BudgetParams::new(params), &mut b[i - lo]);
+                    counts.multi += 1;
+                    let keep = match k.decide(&bp, loads, self.accuracy) {
+                        Decision::Reuse(used) => {
+                            out.copy_from_slice(k.dr());
+                            counts.worst = counts.worst.max(used);
+                            continue;
+                        }
+                        Decision::Exact { keep } => keep,
+                    };
+                    let summary = radius_changes(&params, loads, out, fb).map_err(|e| self.failed(i, e))?;
+                    if keep {
+                        k.store(&bp, loads, out, summary.fallbacks > 0);
+                    }
+                    counts.contacts += nl as u64;
+                    counts.fallbacks += summary.fallbacks as u64;
+                    counts.recomputed += 1;
+                    continue;
+                }
                 let res = match kept.as_deref_mut() {
                     Some(k) => {
                         if let Some(next) = k.get(i - lo + 1) {
@@ -370,17 +432,22 @@ impl McCtx<'_> {
                     }
                     None => radius_changes(&params, loads, out, fb).map(|s| (s, false)),
                 };
-                let (summary, recomputed) = res.map_err(|e| StepError {
-                    step: self.step,
-                    particle: self.p.id[i],
-                    cause: format!("multi-contact kernel: {e}"),
-                    contact: None,
-                })?;
+                let (summary, recomputed) = res.map_err(|e| self.failed(i, e))?;
                 counts.contacts += nl as u64;
                 counts.fallbacks += summary.fallbacks as u64;
                 counts.recomputed += u64::from(recomputed);
             }
             Ok(counts)
         })
+    }
+
+    /// The stop of a kernel call that failed at particle `i`.
+    fn failed(&self, i: usize, e: crate::physics::contact_set::KernelError) -> StepError {
+        StepError {
+            step: self.step,
+            particle: self.p.id[i],
+            cause: format!("multi-contact kernel: {e}"),
+            contact: None,
+        }
     }
 }

@@ -314,6 +314,9 @@ impl World {
         if let Some(cache) = self.multi.mc_cache.as_mut() {
             cache.reorder(&old_of_new);
         }
+        if !self.multi.budget.is_empty() {
+            super::mc_budget::reorder(&mut self.multi.budget, &old_of_new);
+        }
         self.multi.slots_stale = true;
         self.sorts += 1;
     }

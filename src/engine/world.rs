@@ -110,6 +110,12 @@ pub struct World {
     /// appearing in between get their change at the next update. An approximation whose
     /// error `mcdem bench` reports next to its speed.
     pub mc_every: u64,
+    /// Accuracy budget EPS of the multi-contact pass (`mcAccuracy`). 0 (the default): exact, the
+    /// plain pass. > 0: each particle reuses the radius changes of its last exact Eq. 2 evaluation
+    /// while a bound on their error stays below EPS × its scale (docs/dem.md "Accuracy budget").
+    pub mc_accuracy: f64,
+    /// Shadow check interval [steps] of the accuracy budget (`mcAccuracyCheck`; 0: none).
+    pub mc_accuracy_check: u64,
     /// Full multi-contact passes so far.
     pub mc_updates: u64,
     /// Spatial sorting (LAMMPS `atom_modify sort`): at the first neighbour build at least this

@@ -15,6 +15,7 @@ mod groups_lattice;
 mod insert;
 mod mc_advanced;
 mod mc_approximations;
+mod mc_budget;
 mod mesh_walls;
 mod moving_meshes;
 mod mpr_test;

@@ -374,6 +374,19 @@ fn bad_decks_stop_with_one_error_line_naming_the_cause() {
     }
 }
 
+/// The accuracy budget (`mcAccuracy`, docs/dem.md) runs in `mcdem run` only: the plugin stops
+/// naming the keyword rather than run without it.
+#[test]
+fn accuracy_budget_is_refused_by_the_plugin() {
+    let tmp = TempDir::new().unwrap();
+    let d = tmp.path();
+    for setting in ["mcAccuracy 1e-3", "mcAccuracyCheck yes"] {
+        let deck = edited_deck(d, |t| t.replace("${mkey3} ${mval3}", setting));
+        let key = setting.split(' ').next().unwrap();
+        expect_error((&deck, vec![]), d, &[key, "is not implemented in the LIGGGHTS plugin"]);
+    }
+}
+
 use mcdem::outputs::nrmse;
 
 #[test]

@@ -155,7 +155,7 @@ impl Deck {
         m.check()?;
         // The wall runs the pair style's model: the same law and sub-models. The pair style's
         // multi-contact pass serves the walls too, so a wall may repeat its mprTest,
-        // geometryTolerance and updateEvery but not give other values (they would be ignored);
+        // geometryTolerance, updateEvery, mcAccuracy and mcAccuracyCheck but not give other values (they would be ignored);
         // pairRadii concerns pairs only.
         let Some(p) = &self.pair else { return Err("fix wall/gran before pair_style gran".into()) };
         // Three differences are allowed, as LIGGGHTS runs them: a wall may leave out the pair
@@ -182,6 +182,17 @@ impl Deck {
         self.wall_model = Some(m.clone());
         let given = MC_SETTINGS.map(|s| a.contains(&s.name()));
         mc_settings::check_wall(&m.mc_values(), &given, &p.mc_values())?;
+        // The accuracy budget (`mcdem run` only) belongs to the pair style's pass too.
+        let word = |key: &str| a.iter().rposition(|w| *w == key).and_then(|i| a.get(i + 1));
+        let budget = [
+            ("mcAccuracy", p.mc_accuracy.unwrap_or(0.0) == m.mc_accuracy.unwrap_or(0.0)),
+            ("mcAccuracyCheck", p.mc_accuracy_check.unwrap_or(false) == m.mc_accuracy_check.unwrap_or(false)),
+        ];
+        for (key, same) in budget {
+            if let (Some(x), false) = (word(key), same) {
+                return Err(format!("wall/gran {key} {x} differs from the pair style's"));
+            }
+        }
         self.world.walls.push(WallFix { name: a[1].into(), geom });
         Ok(FixKind::Wall(self.world.walls.len() - 1))
     }
