@@ -103,7 +103,7 @@ pub struct mcdem_contact_load {
     pub force: f64,
 }
 
-/// Pair coefficients (App. C), built by [`mcdem_pair_coeffs_new`].
+/// Pair coefficients (App. C), built by [`mcdem_pair_coeffs_new`] or [`mcdem_material_table`].
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct mcdem_pair_coeffs {

@@ -1,6 +1,6 @@
 //! The settings of `model mc_advanced` on a `pair_style gran` / `fix wall/gran` line, read by both
 //! engines from this one table: `mcdem run`'s deck reader calls [`McSetting::parse`] directly, the
-//! LIGGGHTS plugin through the C ABI (`mcdem_setting_*` in `src/ffi.rs`), so that a name, a limit
+//! LIGGGHTS plugin through the C ABI (`mcdem_setting_*` in `src/ffi/setup.rs`), so that a name, a limit
 //! or an error message exists once. Values travel as one `f64` per setting (a choice as 0 or 1, a
 //! step count as a whole number) because that is what crosses the C boundary without a struct per
 //! setting; the typed accessors below turn them back.

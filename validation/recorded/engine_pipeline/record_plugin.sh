@@ -20,7 +20,7 @@ run() {
     cp -r "$root/liggghts_inputs" "$work"
     mkdir -p "$work/post"
     (cd "$work" && "$bin" -in "$deck" -log none -var dir . "$@" \
-        | grep -v -E -e '^Loop time|Performance:|CPU use|Total wall time|^Memory usage' \
+        | grep -a -v -E -e '^Loop time|Performance:|CPU use|Total wall time|^Memory usage' \
             -e '^(Pair|Neigh|Comm|Output|Modify|Other) +\|' \
             -e 'Nlocal:|Nghost:|Neighs:|Histogram|Neighbor list builds|Dangerous builds|Ave neighs|Total # of neighbors' > stdout.txt)
     local dest="$out/$name"
