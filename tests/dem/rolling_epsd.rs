@@ -157,3 +157,68 @@ fn rolling_friction_epsd_bad_input_stops_with_file_and_line() {
         assert!(!ok && out.contains("ERROR: ") && out.contains(want), "want '{want}', got:\n{out}");
     }
 }
+
+/// A restart in the middle of an `epsd` run (liggghts_inputs/rolling_friction_epsd.in, 1000 +
+/// 1000 steps, while the pair 4-5 still touches) carries the rolling springs of the pairs and the
+/// wall contacts: the continued run
+/// ends in the same state, bit for bit, as one deck running `run 1000` twice (not `run 2000`:
+/// every run starts with a set-up pass that does not advance the histories; see restart.rs). Both
+/// kinds of spring are non-zero at the restart (checked), and a continued run whose file has the
+/// springs zeroed ends elsewhere (so the check can fail).
+#[test]
+fn restart_mid_run_carries_the_rolling_springs() {
+    let text = std::fs::read_to_string(
+        crate::against_liggghts::repo().join("liggghts_inputs/rolling_friction_epsd.in"),
+    )
+    .unwrap();
+    let run = "run\t\t${nsteps}";
+    assert!(text.contains(run));
+    let two_runs = text.replace(run, "run 1000\nrun 1000\nwrite_restart end_two_runs.json");
+    let first = text.replace(run, "run 1000\nwrite_restart mid.json");
+    // The continued deck: the box and the particles come from the file, the rest is defined again.
+    let mut continued = String::new();
+    for line in text.lines() {
+        if line.starts_with("region") || line.starts_with("create_atoms") || line.starts_with("set\t") {
+            continue;
+        }
+        if line.starts_with("create_box") {
+            continued.push_str("read_restart mid.json\n");
+            continue;
+        }
+        continued.push_str(&line.replace(run, "run 1000\nwrite_restart end_continued.json"));
+        continued.push('\n');
+    }
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("post")).unwrap();
+    let mcdem = |deck: &str, text: &str| {
+        std::fs::write(dir.path().join(deck), text).unwrap();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_mcdem"))
+            .current_dir(dir.path())
+            .args(["run", deck, "-log", "none", "--no-progress"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{deck}: {}", String::from_utf8_lossy(&o.stderr));
+    };
+    let read = |f: &str| std::fs::read_to_string(dir.path().join(f)).unwrap();
+    mcdem("two_runs.in", &two_runs);
+    mcdem("first.in", &first);
+    let mid: serde_json::Value = serde_json::from_str(&read("mid.json")).unwrap();
+    let e = &mid["engine"];
+    let nonzero = |v: &serde_json::Value| v.as_array().unwrap().iter().any(|x| x.as_f64() != Some(0.0));
+    let pair_springs = e["pair_roll"].as_array().unwrap().iter().filter(|m| nonzero(m)).count();
+    let wall_springs = e["wall_contacts"].as_array().unwrap().iter().filter(|w| nonzero(&w["roll"])).count();
+    assert!(pair_springs >= 1 && wall_springs >= 6, "{pair_springs} pair and {wall_springs} wall springs");
+    mcdem("continued.in", &continued);
+    assert!(read("end_two_runs.json") == read("end_continued.json"), "the continued run differs");
+    // Without the springs the continued run ends elsewhere.
+    let mut zeroed = mid.clone();
+    for m in zeroed["engine"]["pair_roll"].as_array_mut().unwrap() {
+        *m = serde_json::json!([0.0, 0.0, 0.0]);
+    }
+    for w in zeroed["engine"]["wall_contacts"].as_array_mut().unwrap() {
+        w["roll"] = serde_json::json!([0.0, 0.0, 0.0]);
+    }
+    std::fs::write(dir.path().join("mid.json"), zeroed.to_string()).unwrap();
+    mcdem("continued.in", &continued);
+    assert!(read("end_two_runs.json") != read("end_continued.json"), "the springs were not read");
+}
