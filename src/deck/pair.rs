@@ -70,8 +70,26 @@ pub(super) struct GranModel {
     pub(super) cohesion: bool,
     /// `tangential_reduce on|off` (cohesion sjkr; off by default): the Coulomb limit sees the cohesion.
     pub(super) tangential_reduce: bool,
-    /// `rolling_friction cdt` (`rolling_friction off`, the default: false).
-    pub(super) rolling: bool,
+    /// `rolling_friction cdt|epsd|epsd2` (`rolling_friction off`, the default: None).
+    pub(super) rolling: Option<RollStyle>,
+}
+
+/// A rolling model of `pair_style gran` / `fix wall/gran`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum RollStyle {
+    Cdt,
+    Epsd,
+    Epsd2,
+}
+
+impl RollStyle {
+    fn name(self) -> &'static str {
+        match self {
+            RollStyle::Cdt => "cdt",
+            RollStyle::Epsd => "epsd",
+            RollStyle::Epsd2 => "epsd2",
+        }
+    }
 }
 
 /// An `on|off` value of a model option.
@@ -178,8 +196,8 @@ impl GranModel {
         if self.tangential_reduce && !self.cohesion {
             return Err("tangential_reduce is a setting of cohesion sjkr".into());
         }
-        if self.rolling && (advanced || self.surface_mc) {
-            return Err(unsupported("rolling_friction cdt with a multi-contact model"));
+        if let Some(r) = self.rolling.filter(|_| advanced || self.surface_mc) {
+            return Err(unsupported(&format!("rolling_friction {} with a multi-contact model", r.name())));
         }
         if self.cohesion && (advanced || self.surface_mc) {
             return Err(unsupported("cohesion sjkr with a multi-contact model"));
@@ -289,7 +307,7 @@ impl Deck {
             kt_to_kn: false,
             cohesion: false,
             tangential_reduce: false,
-            rolling: false,
+            rolling: None,
         };
         let mut k = start;
         while k < a.len() {
@@ -297,15 +315,17 @@ impl Deck {
             match (a[k], v) {
                 ("model", Some(x)) => m.model = Some(x.parse()?),
                 ("tangential", Some(x)) => m.tangential = tangential_model(x)?,
-                ("rolling_friction", Some("off")) => m.rolling = false,
-                ("rolling_friction", Some("cdt")) => m.rolling = true,
-                ("rolling_friction", Some(x @ ("epsd" | "epsd2" | "epsd3"))) => {
-                    return Err(unsupported(&format!(
-                        "rolling_friction {x} (the elastic-plastic spring-dashpot rolling models; cdt or off)"
-                    )))
+                ("rolling_friction", Some("off")) => m.rolling = None,
+                ("rolling_friction", Some("cdt")) => m.rolling = Some(RollStyle::Cdt),
+                ("rolling_friction", Some("epsd")) => m.rolling = Some(RollStyle::Epsd),
+                ("rolling_friction", Some("epsd2")) => m.rolling = Some(RollStyle::Epsd2),
+                ("rolling_friction", Some("epsd3")) => {
+                    return Err(unsupported(
+                        "rolling_friction epsd3 (its user-set rolling stiffness coefficientRollingStiffness is not modelled; cdt, epsd, epsd2 or off)",
+                    ))
                 }
                 ("rolling_friction", Some(other)) => {
-                    return Err(unsupported(&format!("rolling model '{other}' (cdt or off)")))
+                    return Err(unsupported(&format!("rolling model '{other}' (cdt, epsd, epsd2 or off)")))
                 }
                 ("cohesion", Some("off")) => m.cohesion = false,
                 ("cohesion", Some("sjkr")) => m.cohesion = true,
@@ -479,19 +499,30 @@ impl Deck {
                 World::add_cohesion(&mut walls, nt, &ced, w.tangential_reduce)?;
             }
         }
-        if pair.rolling || wall_model.as_ref().is_some_and(|w| w.rolling) {
-            const NAME: &str = "coefficientRollingFriction";
-            if !self.props.contains_key(NAME) {
-                return Err(format!(
-                    "fix property/global {NAME} is missing (rolling_friction cdt needs 'fix ID all property/global {NAME} peratomtypepair N ...')"
-                ));
-            }
-            let mu_r = per_pair(self, NAME)?;
-            if pair.rolling {
-                World::add_rolling_friction(&mut self.world.coeffs, nt, &mu_r)?;
-            }
-            if wall_model.as_ref().is_some_and(|w| w.rolling) {
-                World::add_rolling_friction(&mut walls, nt, &mu_r)?;
+        let wall_rolling = wall_model.as_ref().and_then(|w| w.rolling);
+        if let Some(first) = pair.rolling.or(wall_rolling) {
+            let need = |name: &str, style: RollStyle| {
+                if self.props.contains_key(name) {
+                    per_pair(self, name)
+                } else {
+                    Err(format!(
+                        "fix property/global {name} is missing (rolling_friction {} needs 'fix ID all property/global {name} peratomtypepair N ...')",
+                        style.name()
+                    ))
+                }
+            };
+            let mu_r = need("coefficientRollingFriction", first)?;
+            // `epsd` alone has a dashpot.
+            let epsd = [pair.rolling, wall_rolling].contains(&Some(RollStyle::Epsd));
+            let damping =
+                if epsd { Some(need("coefficientRollingViscousDamping", RollStyle::Epsd)?) } else { None };
+            for (style, table) in [(pair.rolling, &mut self.world.coeffs), (wall_rolling, &mut walls)] {
+                match style {
+                    None => {}
+                    Some(RollStyle::Cdt) => World::add_rolling_friction(table, nt, &mu_r)?,
+                    Some(RollStyle::Epsd) => World::add_rolling_spring(table, nt, &mu_r, damping.as_deref())?,
+                    Some(RollStyle::Epsd2) => World::add_rolling_spring(table, nt, &mu_r, None)?,
+                }
             }
         }
         self.world.wall_coeffs = (walls != self.world.coeffs).then_some(walls);

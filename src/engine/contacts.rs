@@ -20,6 +20,10 @@ pub(super) struct Contacts {
     /// neither load nor store it.
     pub(super) pair_dmax: Vec<f64>,
     pub(super) pair_dmax_old: Vec<f64>,
+    /// Per pair, under a rolling model with a spring (`epsd`, `epsd2`): the rolling spring torque
+    /// M_k of the contact (zero when apart). Empty under the other models, as `pair_dmax`.
+    pub(super) pair_roll: Vec<Vec3>,
+    pub(super) pair_roll_old: Vec<Vec3>,
     pub(super) wc: Vec<WallContact>,
     pub(super) wc_old: Vec<WallContact>,
     /// Per pair, under the multi-contact closure: this step's radius changes (a Hertz pass reads none).
@@ -111,6 +115,9 @@ pub(super) struct WallContact {
     /// multi-contact pass reads it, as LIGGGHTS does; zero for a contact seen for the first time.
     pub(super) rel_prev: Vec3,
     pub(super) dr: f64,
+    /// The rolling spring torque M_k of `epsd`/`epsd2` (zero under the other models and for a
+    /// contact seen for the first time).
+    pub(super) roll: Vec3,
 }
 
 impl WallContact {
@@ -127,6 +134,7 @@ impl WallContact {
             fn_prev: 0.0,
             rel_prev: Vec3::zeros(),
             dr: 0.0,
+            roll: Vec3::zeros(),
         }
     }
 

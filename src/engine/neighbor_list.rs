@@ -151,6 +151,11 @@ impl World {
         self.contacts.pair_dmax.clear();
         let keep_dmax = self.normal_history();
         let old_dmax = self.contacts.pair_dmax_old.len() == self.contacts.pairs_old.len();
+        // And the rolling spring.
+        std::mem::swap(&mut self.contacts.pair_roll, &mut self.contacts.pair_roll_old);
+        self.contacts.pair_roll.clear();
+        let keep_roll = self.rolling_history();
+        let old_roll = self.contacts.pair_roll_old.len() == self.contacts.pairs_old.len();
         let mut k = 0;
         for &(i, j) in &self.lists.cand {
             while k < self.contacts.pairs_old.len()
@@ -167,6 +172,10 @@ impl World {
             if keep_dmax {
                 let h = old.filter(|_| old_dmax).map(|_| self.contacts.pair_dmax_old[k]);
                 self.contacts.pair_dmax.push(h.unwrap_or(0.0));
+            }
+            if keep_roll {
+                let h = old.filter(|_| old_roll).map(|_| self.contacts.pair_roll_old[k]);
+                self.contacts.pair_roll.push(h.unwrap_or(Vec3::zeros()));
             }
         }
         self.multi.slots_stale = true;
@@ -283,6 +292,11 @@ impl World {
                 if let Some(h) = self.contacts.pair_hist.get_mut(k) {
                     std::mem::swap(&mut h.ri_prev, &mut h.rj_prev);
                 }
+                // The rolling spring is the torque on j (−M on i), built from ω_i − ω_j: it
+                // changes sign too.
+                if let Some(m) = self.contacts.pair_roll.get_mut(k) {
+                    *m = -*m;
+                }
             }
         }
         if self.contacts.pair_dmax.len() == self.contacts.pairs.len() {
@@ -294,6 +308,16 @@ impl World {
             self.contacts.pair_dmax = order.iter().map(|&k| self.contacts.pair_dmax[k as usize]).collect();
         } else {
             self.contacts.pair_dmax.clear();
+        }
+        if self.contacts.pair_roll.len() == self.contacts.pairs.len() {
+            // The rolling spring follows its pair the same way.
+            let mut order: Vec<u32> = (0..self.contacts.pairs.len() as u32).collect();
+            order.sort_unstable_by_key(|&k| {
+                (self.contacts.pairs[k as usize].i, self.contacts.pairs[k as usize].j)
+            });
+            self.contacts.pair_roll = order.iter().map(|&k| self.contacts.pair_roll[k as usize]).collect();
+        } else {
+            self.contacts.pair_roll.clear();
         }
         if self.contacts.pair_hist.len() == self.contacts.pairs.len() {
             // One permutation for both lists.

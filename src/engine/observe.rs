@@ -4,7 +4,7 @@
 use crate::physics::{NormalLaw, Vec3};
 
 use super::contacts::PairContact;
-use super::pair_eval::PairCtx;
+use super::pair_eval::{ContactHistory, PairCtx};
 use super::particles::INERTIA;
 use super::sinks::Touching;
 use super::{Closure, StepError, WallGeom, World};
@@ -124,9 +124,8 @@ impl World {
         let mc = self.closure == Some(Closure::MultiContact)
             && self.contacts.pair_hist.len() == np
             && self.contacts.pair_dr.len() == np;
-        let hist = self.normal_history() && self.contacts.pair_dmax.len() == np;
         let closure = mc.then_some((&self.contacts.pair_dr[..], &mut self.contacts.pair_hist[..]));
-        let dmax = hist.then_some(&mut self.contacts.pair_dmax[..]);
+        let dmax = ContactHistory::of(&mut self.contacts.pair_dmax, &mut self.contacts.pair_roll, np);
         let mut touching = Touching { x: &self.p.x, domain, out: Vec::new(), pair: Vec::new() };
         ctx.pass(&mut self.contacts.pairs, closure, dmax, false, &mut touching).map_err(|e| *e)?;
         let mut out = touching.out;

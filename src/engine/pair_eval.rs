@@ -1,7 +1,9 @@
 //! One pair's contact through [`crate::physics::pair`]: pair by pair or in vectorised batches,
 //! with or without the multi-contact closure's state (the [`PairState`] of a pass).
 
-use crate::physics::pair::{particle_particle_with_history, Body, ContactError, PairLanes, LANES};
+use crate::physics::pair::{
+    particle_particle_with_history, Body, ContactError, PairLanes, RollSpring, LANES,
+};
 use crate::physics::{PairCoeffs, Vec3};
 
 use super::contacts::{contact_error, Pair, PairDr, PairHist, RECEIVER_GAP};
@@ -15,6 +17,9 @@ pub(super) struct PairCtx<'a> {
     pub(super) nt: usize,
     pub(super) domain: Domain,
     pub(super) dt: f64,
+    /// The run's time step, whatever `update`: the rolling spring advances by it on every pass
+    /// (as LIGGGHTS' does), kept only on a time step.
+    pub(super) roll_dt: f64,
     pub(super) update: bool,
     pub(super) step: u64,
     pub(super) liggghts_radii: bool,
@@ -34,8 +39,9 @@ impl<'a> PairCtx<'a> {
         step: u64,
         liggghts_radii: bool,
     ) -> Self {
+        let roll_dt = dt;
         let dt = if update { dt } else { 0.0 };
-        PairCtx { p, coeffs, nt, domain, dt, update, step, liggghts_radii }
+        PairCtx { p, coeffs, nt, domain, dt, roll_dt, update, step, liggghts_radii }
     }
 }
 
@@ -79,8 +85,20 @@ impl PairCtx<'_> {
         let c = &self.coeffs[p.typ[i] * self.nt + p.typ[j]];
         let mut shear = pr.shear;
         let mut delta_max = state.delta_max(k);
-        let r = particle_particle_with_history(c, &bi, &bj, dri, dr[1], self.dt, &mut shear, &mut delta_max)
-            .map_err(|e| Box::new(contact_error(self.step, p.id[i], Some(p.id[j]), e)))?;
+        let mut roll = state.roll(k);
+        let spring = RollSpring { spring: &mut roll, dt: self.roll_dt };
+        let r = particle_particle_with_history(
+            c,
+            &bi,
+            &bj,
+            dri,
+            dr[1],
+            self.dt,
+            &mut shear,
+            &mut delta_max,
+            spring,
+        )
+        .map_err(|e| Box::new(contact_error(self.step, p.id[i], Some(p.id[j]), e)))?;
         let fnorm = match r {
             Some(cf) => {
                 *out = PairOut {
@@ -100,6 +118,7 @@ impl PairCtx<'_> {
             pr.shear = shear;
             state.keep(k, fnorm, ri_stored, rj);
             state.keep_delta_max(k, delta_max);
+            state.keep_roll(k, roll);
         }
         Ok(())
     }
@@ -129,6 +148,7 @@ impl PairCtx<'_> {
                 pr.shear = Vec3::zeros();
                 state.keep(k, 0.0, ri, rj);
                 state.keep_delta_max(k, 0.0);
+                state.keep_roll(k, Vec3::zeros());
             }
             return None;
         }
@@ -235,19 +255,18 @@ impl PairCtx<'_> {
 impl PairCtx<'_> {
     /// Evaluates `pairs` in order into `sink` (vectorised batches when `batched`), with their
     /// radius changes and closure state when the multi-contact closure is on (`closure`, one
-    /// entry per pair each), or with the normal law's history when it keeps one (`delta_max`, one
-    /// per pair; `hooke/hysteresis`, which has no multi-contact form and no batches).
+    /// entry per pair each), or with the per-contact histories of the laws that keep one
+    /// (`history`: `hooke/hysteresis`, the `epsd` rolling springs; no multi-contact form, no batches).
     pub(super) fn pass(
         &self,
         pairs: &mut [Pair],
         closure: Option<(&[PairDr], &mut [PairHist])>,
-        delta_max: Option<&mut [f64]>,
+        history: Option<ContactHistory>,
         batched: bool,
         sink: &mut impl PairSink,
     ) -> Result<(), Box<StepError>> {
-        if let Some(dmax) = delta_max {
-            let n = pairs.len();
-            return self.pass_with(pairs, &mut NormalHistory { delta_max: &mut dmax[..n] }, false, sink);
+        if let Some(mut h) = history {
+            return self.pass_with(pairs, &mut h, false, sink);
         }
         match closure {
             None => self.pass_with(pairs, &mut NoClosure, batched, sink),
@@ -296,6 +315,14 @@ pub(super) trait PairState {
     /// Keeps the normal law's history of pair k (nothing to keep for the other laws).
     #[inline(always)]
     fn keep_delta_max(&mut self, _: usize, _: f64) {}
+    /// The rolling spring of pair k (`epsd`, `epsd2`; zero otherwise).
+    #[inline(always)]
+    fn roll(&self, _: usize) -> Vec3 {
+        Vec3::zeros()
+    }
+    /// Keeps the rolling spring of pair k (nothing to keep for the other models).
+    #[inline(always)]
+    fn keep_roll(&mut self, _: usize, _: Vec3) {}
 }
 
 /// Hertz: no radius changes, nothing kept.
@@ -334,13 +361,27 @@ impl PairState for ClosureState<'_> {
     }
 }
 
-/// A normal law with a history of its own (`hooke/hysteresis`): no radius changes, the largest
-/// overlap of each pair in and out.
-pub(super) struct NormalHistory<'a> {
+/// The per-pair histories of the laws that keep one, no radius changes: the largest overlap of
+/// `hooke/hysteresis` (`delta_max`) and the rolling spring of `epsd`/`epsd2` (`roll`), one entry
+/// per pair each, or empty when the law is not in use.
+pub(super) struct ContactHistory<'a> {
     pub(super) delta_max: &'a mut [f64],
+    pub(super) roll: &'a mut [Vec3],
 }
 
-impl PairState for NormalHistory<'_> {
+impl<'a> ContactHistory<'a> {
+    /// The histories of `np` pairs: each array that holds one entry per pair (the others are
+    /// empty when their law is not in use); None when neither does.
+    pub(super) fn of(delta_max: &'a mut [f64], roll: &'a mut [Vec3], np: usize) -> Option<Self> {
+        let (d, r) = (delta_max.len() == np, roll.len() == np);
+        (np > 0 && (d || r)).then(|| ContactHistory {
+            delta_max: &mut delta_max[..if d { np } else { 0 }],
+            roll: &mut roll[..if r { np } else { 0 }],
+        })
+    }
+}
+
+impl PairState for ContactHistory<'_> {
     #[inline(always)]
     fn dr(&self, _: usize) -> PairDr {
         [0.0; 2]
@@ -351,10 +392,22 @@ impl PairState for NormalHistory<'_> {
     fn keep(&mut self, _: usize, _: f64, _: f64, _: f64) {}
     #[inline(always)]
     fn delta_max(&self, k: usize) -> f64 {
-        self.delta_max[k]
+        self.delta_max.get(k).copied().unwrap_or(0.0)
     }
     #[inline(always)]
     fn keep_delta_max(&mut self, k: usize, v: f64) {
-        self.delta_max[k] = v;
+        if let Some(d) = self.delta_max.get_mut(k) {
+            *d = v;
+        }
+    }
+    #[inline(always)]
+    fn roll(&self, k: usize) -> Vec3 {
+        self.roll.get(k).copied().unwrap_or(Vec3::zeros())
+    }
+    #[inline(always)]
+    fn keep_roll(&mut self, k: usize, v: Vec3) {
+        if let Some(m) = self.roll.get_mut(k) {
+            *m = v;
+        }
     }
 }

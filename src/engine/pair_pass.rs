@@ -3,11 +3,11 @@
 
 use crate::physics::hertz::Tangential;
 use crate::physics::pair::PairLanes;
-use crate::physics::{NormalLaw, PairCoeffs, Vec3};
+use crate::physics::{NormalLaw, PairCoeffs, RollingLaw, Vec3};
 use crate::team::SplitMut;
 
 use super::blocks::{BALANCE_PASSES, MAX_PAIR_BLOCKS, MIN_BLOCK_PAIRS};
-use super::pair_eval::PairCtx;
+use super::pair_eval::{ContactHistory, PairCtx};
 use super::sinks::{Keep, OwnedSums, PairOut, SharedSums, SumInto};
 use super::{StepError, World};
 
@@ -81,6 +81,11 @@ impl World {
         self.coeffs.iter().any(|c| c.normal.has_history())
     }
 
+    /// The pairs' rolling model keeps a spring per contact (`epsd`, `epsd2`).
+    pub(super) fn rolling_history(&self) -> bool {
+        self.coeffs.iter().any(|c| c.rolling_friction > 0.0 && matches!(c.rolling_law, RollingLaw::Spring(_)))
+    }
+
     /// Pair forces and torques into every particle's sums (from zero), each pair's force recorded
     /// for the outputs, and on a time step (`update`) the pairs' histories advanced. `mc`: the
     /// multi-contact closure is on (its radius changes are read, its state kept).
@@ -91,17 +96,23 @@ impl World {
         threads: usize,
         batched: bool,
     ) -> Result<(), StepError> {
-        // A normal law with a per-pair history runs on one thread: its history array is not
-        // split into the threads' shares (the decks that use it are small).
-        let hist = self.normal_history();
+        // A law with a per-pair history runs on one thread: its history array is not split into
+        // the threads' shares (the decks that use it are small).
+        let hist = self.normal_history() || self.rolling_history();
         let strategy = if hist { PairStrategy::Serial } else { self.pair_strategy(threads) };
         let np = self.contacts.pairs.len();
-        if !hist {
+        if !self.normal_history() {
             self.contacts.pair_dmax.clear();
         } else if self.contacts.pair_dmax.len() != np {
             // A law that starts now finds every pair new.
             self.contacts.pair_dmax.clear();
             self.contacts.pair_dmax.resize(np, 0.0);
+        }
+        if !self.rolling_history() {
+            self.contacts.pair_roll.clear();
+        } else if self.contacts.pair_roll.len() != np {
+            self.contacts.pair_roll.clear();
+            self.contacts.pair_roll.resize(np, Vec3::zeros());
         }
         if !mc {
             // Hertz keeps no closure state: a closure that starts later finds every pair new.
@@ -121,7 +132,6 @@ impl World {
     /// [`PairStrategy::Serial`]. The threaded strategies add in this order too: identical sums.
     fn pairs_serial(&mut self, update: bool, mc: bool, batched: bool) -> Result<(), StepError> {
         let n = self.p.len();
-        let hist = self.normal_history();
         let ctx = PairCtx::new(
             &self.p,
             &self.coeffs,
@@ -141,8 +151,9 @@ impl World {
         torque.resize(n, Vec3::zeros());
         let mut sums = SumInto { f, torque, force: &mut self.contacts.pair_force };
         let closure = mc.then_some((&self.contacts.pair_dr[..], &mut self.contacts.pair_hist[..]));
-        let dmax = hist.then_some(&mut self.contacts.pair_dmax[..]);
-        ctx.pass(&mut self.contacts.pairs, closure, dmax, batched, &mut sums).map_err(|e| *e)?;
+        let np = self.contacts.pairs.len();
+        let history = ContactHistory::of(&mut self.contacts.pair_dmax, &mut self.contacts.pair_roll, np);
+        ctx.pass(&mut self.contacts.pairs, closure, history, batched, &mut sums).map_err(|e| *e)?;
         std::mem::swap(&mut self.p.f, &mut self.pair_scratch.f_buf);
         std::mem::swap(&mut self.p.torque, &mut self.pair_scratch.t_buf);
         Ok(())

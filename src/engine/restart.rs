@@ -32,6 +32,10 @@ pub struct EngineState {
     /// and whether the pair may receive multi-contact terms (empty under Hertz).
     pub pair_hist: Vec<[f64; 3]>,
     pub pair_near: Vec<bool>,
+    /// Per pair under a rolling model with a spring (`epsd`, `epsd2`): the rolling spring torque
+    /// (empty under the other models, and in files written before it was saved).
+    #[serde(default)]
+    pub pair_roll: Vec<[f64; 3]>,
     /// Particle–wall contacts: `[particle, wall fix, mesh, triangle]` and their state.
     pub wall_contacts: Vec<WallContactState>,
 }
@@ -65,6 +69,9 @@ pub struct WallContactState {
     pub fn_prev: f64,
     pub rel_prev: [f64; 3],
     pub dr: f64,
+    /// The rolling spring torque of `epsd`/`epsd2` (zero otherwise; absent in older files).
+    #[serde(default)]
+    pub roll: [f64; 3],
 }
 
 fn a3(v: &Vec3) -> [f64; 3] {
@@ -124,6 +131,7 @@ impl World {
             pair_shear: c.pairs.iter().map(|q| a3(&q.shear)).collect(),
             pair_hist: c.pair_hist.iter().map(|h| [h.fn_prev, h.ri_prev, h.rj_prev]).collect(),
             pair_near: c.pair_hist.iter().map(|h| h.near).collect(),
+            pair_roll: vecs(&c.pair_roll),
             wall_contacts: c
                 .wc
                 .iter()
@@ -135,6 +143,7 @@ impl World {
                     fn_prev: w.fn_prev,
                     rel_prev: a3(&w.rel_prev),
                     dr: w.dr,
+                    roll: a3(&w.roll),
                 })
                 .collect(),
         })
@@ -166,6 +175,7 @@ impl World {
         if s.pairs.len() != s.pair_shear.len()
             || (!s.pair_hist.is_empty() && s.pair_hist.len() != s.pairs.len())
             || s.pair_near.len() != s.pair_hist.len()
+            || (!s.pair_roll.is_empty() && s.pair_roll.len() != s.pairs.len())
         {
             return Err("the pair arrays differ in length".into());
         }
@@ -204,6 +214,7 @@ impl World {
             .zip(&s.pair_near)
             .map(|(h, &near)| PairHist { fn_prev: h[0], ri_prev: h[1], rj_prev: h[2], near })
             .collect();
+        c.pair_roll = unvecs(&s.pair_roll);
         c.wc = s
             .wall_contacts
             .iter()
@@ -218,6 +229,7 @@ impl World {
                 fn_prev: w.fn_prev,
                 rel_prev: v3(&w.rel_prev),
                 dr: w.dr,
+                roll: v3(&w.roll),
             })
             .collect();
         Ok(())

@@ -171,6 +171,7 @@ fn copy_history(c: &mut WallContact, o: &WallContact) {
     c.shear = o.shear;
     c.fn_prev = o.fn_prev;
     c.rel_prev = o.rel_prev;
+    c.roll = o.roll;
     // Read only between multi-contact updates (every pass sets it anew).
     c.dr = o.dr;
 }

@@ -1,7 +1,7 @@
 //! The wall stage: which wall elements each particle is close to (candidates, then the exact search
 //! of `wall_contacts`), and the particle–wall forces through [`crate::physics::pair`].
 
-use crate::physics::pair::{particle_wall, Body, WallLanes, WallPoint, LANES};
+use crate::physics::pair::{particle_wall_with_history, Body, RollSpring, WallLanes, WallPoint, LANES};
 use crate::physics::{PairCoeffs, Vec3};
 use crate::team::{share, SplitMut};
 
@@ -122,6 +122,8 @@ pub(super) struct WallCtx<'a> {
     pub(super) mass: &'a [f64],
     pub(super) id: &'a [i64],
     pub(super) dt: f64,
+    /// The run's time step, whatever `update` (see `PairCtx::roll_dt`).
+    pub(super) roll_dt: f64,
     pub(super) update: bool,
     pub(super) step: u64,
     /// Evaluate the contacts that reach their wall in vectorised batches ([`WallLanes`]).
@@ -144,20 +146,33 @@ impl WallCtx<'_> {
             return self.forces_batched(wc, force, f, torque, base);
         }
         for (c, fc) in wc.iter_mut().zip(force) {
-            let (out, shear) = self.one(c)?;
+            let (out, shear, roll) = self.one(c)?;
+            if self.update {
+                c.roll = roll;
+            }
             self.finish(c, fc, shear, out, f, torque, base);
         }
         Ok(())
     }
 
-    /// One contact by [`particle_wall`]: (force, torque, |F·n|) if it touches, and its new
-    /// tangential history; a contact that cannot be integrated stops the step, naming the particle.
-    pub(super) fn one(&self, c: &WallContact) -> Result<(WallOut, Vec3), StepError> {
+    /// One contact by [`particle_wall_with_history`]: (force, torque, |F·n|) if it touches, and
+    /// its new tangential history and rolling spring; a contact that cannot be integrated stops
+    /// the step, naming the particle.
+    pub(super) fn one(&self, c: &WallContact) -> Result<(WallOut, Vec3, Vec3), StepError> {
         let i = c.p as usize;
-        let mut shear = c.shear;
-        let r = particle_wall(self.coeff(c), &self.body(i), &self.wall_point(c), c.dr, self.dt, &mut shear)
-            .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
-        Ok((r.map(|cf| (cf.force_i, cf.torque_i, cf.force_i.dot(&cf.en).abs())), shear))
+        let (mut shear, mut roll) = (c.shear, c.roll);
+        let spring = RollSpring { spring: &mut roll, dt: self.roll_dt };
+        let r = particle_wall_with_history(
+            self.coeff(c),
+            &self.body(i),
+            &self.wall_point(c),
+            c.dr,
+            self.dt,
+            &mut shear,
+            spring,
+        )
+        .map_err(|e| contact_error(self.step, self.id[i], None, e))?;
+        Ok((r.map(|cf| (cf.force_i, cf.torque_i, cf.force_i.dot(&cf.en).abs())), shear, roll))
     }
 
     /// [`WallCtx::forces`] with the contacts that reach their wall evaluated in batches of
@@ -326,6 +341,7 @@ impl World {
             mass: &self.p.mass,
             id: &self.p.id,
             dt,
+            roll_dt: self.dt,
             update,
             step: self.step,
             batched,

@@ -390,6 +390,25 @@ impl World {
         Ok(())
     }
 
+    /// Adds `rolling_friction epsd` (with the per-type-pair `coefficientRollingViscousDamping`
+    /// `damping`) or `epsd2` (`damping` None) with the per-type-pair coefficients `mu_r` to `table`.
+    pub fn add_rolling_spring(
+        table: &mut [PairCoeffs],
+        nt: usize,
+        mu_r: &[f64],
+        damping: Option<&[f64]>,
+    ) -> Result<(), String> {
+        if mu_r.len() != table.len() || damping.is_some_and(|d| d.len() != table.len()) {
+            return Err(format!("peratomtypepair tables must have {nt}×{nt} entries"));
+        }
+        for (k, c) in table.iter_mut().enumerate() {
+            *c = c
+                .with_rolling_spring(mu_r[k], damping.map(|d| d[k]))
+                .map_err(|e| format!("types {} and {}: {e}", k / nt + 1, k % nt + 1))?;
+        }
+        Ok(())
+    }
+
     pub fn add_cohesion(
         table: &mut [PairCoeffs],
         nt: usize,

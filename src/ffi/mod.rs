@@ -195,6 +195,7 @@ fn coeffs(c: &mcdem_pair_coeffs) -> Result<PairCoeffs, FfiError> {
         cohesion: 0.0,
         tangential_reduce: false,
         rolling_friction: 0.0,
+        rolling_law: crate::physics::RollingLaw::Cdt,
         damping_ratio_t_n: c.damping_ratio_t_n,
     })
 }

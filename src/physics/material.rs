@@ -4,6 +4,7 @@
 use std::fmt;
 
 use super::ghods2022::{Cap, MprTest};
+use super::rolling_epsd::Epsd;
 
 /// Per-type material of a particle (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -219,6 +220,16 @@ impl NormalLaw {
     }
 }
 
+/// The rolling model of a pair with rolling friction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RollingLaw {
+    /// `cdt`: constant directional torque, no history ([`super::rolling_cdt`]).
+    Cdt,
+    /// `epsd` or `epsd2`: the elastic–plastic spring(–dashpot), with a per-contact spring
+    /// ([`super::rolling_epsd`]).
+    Spring(Epsd),
+}
+
 /// Coefficients of one type pair, precomputed once (App. C, Eqs. C.3, C.4, C.8).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairCoeffs {
@@ -239,9 +250,11 @@ pub struct PairCoeffs {
     pub cohesion: f64,
     /// `tangential_reduce on` (of `cohesion sjkr`): the Coulomb limit sees the cohesive force.
     pub tangential_reduce: bool,
-    /// `rolling_friction cdt`: the pair's `coefficientRollingFriction` μ_r [-]
-    /// ([`super::rolling_cdt`]); 0 without rolling friction.
+    /// `rolling_friction cdt|epsd|epsd2`: the pair's `coefficientRollingFriction` μ_r [-]; 0
+    /// without rolling friction (no rolling torque whatever `rolling_law`).
     pub rolling_friction: f64,
+    /// Which rolling model μ_r belongs to (read only when μ_r > 0).
+    pub rolling_law: RollingLaw,
     /// γ_t / γ_n = √(S_t / S_n) = √(4 G* / E*): a property of the pair of materials, so the
     /// tangential damping costs a product per contact instead of a square root. Derived: build
     /// with [`PairCoeffs::new`] or [`PairCoeffs::from_moduli`].
@@ -277,6 +290,7 @@ impl PairCoeffs {
             cohesion: 0.0,
             tangential_reduce: false,
             rolling_friction: 0.0,
+            rolling_law: RollingLaw::Cdt,
             damping_ratio_t_n: (4.0 * g_star / e_star).sqrt(),
         }
     }
@@ -319,6 +333,19 @@ impl PairCoeffs {
     /// The same pair with `rolling_friction cdt` of coefficient `mu_r` ≥ 0.
     pub fn with_rolling_friction(self, mu_r: f64) -> Result<Self, MaterialError> {
         let m = check("coefficientRollingFriction", mu_r, "finite and >= 0", |v| v >= 0.0)?;
-        Ok(Self { rolling_friction: m, ..self })
+        Ok(Self { rolling_friction: m, rolling_law: RollingLaw::Cdt, ..self })
+    }
+
+    /// The same pair with `rolling_friction epsd` (`damping` = `coefficientRollingViscousDamping`
+    /// η_r ≥ 0) or `epsd2` (`damping` None) of coefficient `mu_r` ≥ 0.
+    pub fn with_rolling_spring(self, mu_r: f64, damping: Option<f64>) -> Result<Self, MaterialError> {
+        let m = check("coefficientRollingFriction", mu_r, "finite and >= 0", |v| v >= 0.0)?;
+        let model = match damping {
+            Some(d) => Epsd::Epsd {
+                damping: check("coefficientRollingViscousDamping", d, "finite and >= 0", |v| v >= 0.0)?,
+            },
+            None => Epsd::Epsd2,
+        };
+        Ok(Self { rolling_friction: m, rolling_law: RollingLaw::Spring(model), ..self })
     }
 }

@@ -10,6 +10,7 @@
 //! - [`hooke_hysteresis`]: LIGGGHTS' `model hooke/hysteresis` (Walton–Braun loop with adhesion).
 //! - [`sjkr`]: LIGGGHTS' `cohesion sjkr` (simplified JKR cohesion).
 //! - [`rolling_cdt`]: LIGGGHTS' `rolling_friction cdt` (constant directional rolling torque).
+//! - [`rolling_epsd`]: LIGGGHTS' `rolling_friction epsd`/`epsd2` (elastic–plastic rolling spring).
 //! - [`brodu2015`]: the standard multi-contact displacement (Brodu et al. 2015; Ghods et al. Eq. 2).
 //! - [`ghods2022`]: the advanced multi-contact switch (Ghods et al. Eq. 3 and App. A).
 //! - [`contact_set`]: the per-particle kernel that applies Eq. 2 (and Eq. 3) to all contacts of one particle.
@@ -30,6 +31,7 @@ pub mod mc_settings;
 pub mod model_kind;
 pub mod pair;
 pub mod rolling_cdt;
+pub mod rolling_epsd;
 pub mod sjkr;
 pub mod timestep;
 
@@ -64,4 +66,4 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use contact_set::{ContactLoad, ContactSetKernel, McParams};
 pub use ghods2022::{Cap, MprTest};
-pub use material::{Hooke, Hysteresis, Material, MaterialError, NormalLaw, PairCoeffs};
+pub use material::{Hooke, Hysteresis, Material, MaterialError, NormalLaw, PairCoeffs, RollingLaw};

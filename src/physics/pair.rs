@@ -6,9 +6,9 @@
 use std::fmt;
 
 use super::hertz::{self, NormalForce, Tangential};
-use super::material::{NormalLaw, PairCoeffs};
+use super::material::{NormalLaw, PairCoeffs, RollingLaw};
 use super::Vec3;
-use super::{hooke, hooke_hysteresis, rolling_cdt, sjkr};
+use super::{hooke, hooke_hysteresis, rolling_cdt, rolling_epsd, sjkr};
 
 /// Kinematic state of one spherical body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,8 +104,28 @@ struct Geometry {
     rj: f64,
     wall: bool,
     /// Relative rolling velocity, read by the rolling friction only: ω_i − ω_j for a pair, the
-    /// rotation at the contact (r − δ/2) ω_i for a wall (LIGGGHTS `wr`).
+    /// rotation at the contact (r − δ/2) ω_i for a wall (LIGGGHTS `wr` times r).
     wroll: Vec3,
+    /// Masses of i and j (j's is unread for a wall): the rolling inertia of `epsd`.
+    mi: f64,
+    mj: f64,
+}
+
+/// A contact's rolling spring (`rolling_friction epsd|epsd2`; unread by the other models): the
+/// spring torque of the last step, advanced in place, and the time step it advances by (LIGGGHTS
+/// advances it by the run's time step on every pass, the set-up pass too, where the caller then
+/// does not keep it).
+pub struct RollSpring<'a> {
+    pub spring: &'a mut Vec3,
+    pub dt: f64,
+}
+
+impl RollSpring<'_> {
+    /// For the callers whose laws keep no rolling spring.
+    #[inline(always)]
+    fn unused(spring: &mut Vec3) -> RollSpring<'_> {
+        RollSpring { spring, dt: 0.0 }
+    }
 }
 
 // Always inlined: the caller then keeps only the fields it reads, instead of copying the whole
@@ -115,7 +135,15 @@ struct Geometry {
 #[inline(always)]
 // `delta_max`: the normal law's history (the largest overlap of `hooke/hysteresis`), unread by
 // the other laws.
-fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3, delta_max: &mut f64) -> ContactForce {
+// `roll`: the rolling spring, read by `epsd`/`epsd2` only.
+fn forces(
+    c: &PairCoeffs,
+    g: &Geometry,
+    dt: f64,
+    shear: &mut Vec3,
+    delta_max: &mut f64,
+    roll: RollSpring,
+) -> ContactForce {
     let vn = g.vr.dot(&g.en);
     let mut normal = match &c.normal {
         NormalLaw::Hertz => hertz::normal(c, g.overlap, g.reff, g.meff, vn),
@@ -155,16 +183,51 @@ fn forces(c: &PairCoeffs, g: &Geometry, dt: f64, shear: &mut Vec3, delta_max: &m
         *shear = Vec3::zeros();
     }
     if c.rolling_friction > 0.0 {
-        // `rolling_friction cdt` after the tangential model, as LIGGGHTS orders its sub-models;
-        // the wall's lever is the particle radius (see [`rolling_cdt`]).
+        // The rolling model after the tangential model, as LIGGGHTS orders its sub-models; the
+        // wall's lever is the particle radius (see [`rolling_cdt`]).
         let lever = if g.wall { g.ri } else { rolling_cdt::pair_lever(g.ri, g.rj) };
-        let t = rolling_cdt::torque(c.rolling_friction, normal.kn, g.overlap, lever, g.wroll, g.en);
+        let t = match c.rolling_law {
+            RollingLaw::Cdt => {
+                rolling_cdt::torque(c.rolling_friction, normal.kn, g.overlap, lever, g.wroll, g.en)
+            }
+            RollingLaw::Spring(model) => rolling_spring(c.rolling_friction, model, g, &normal, lever, roll),
+        };
         torque_i += t;
         if !g.wall {
             torque_j -= t;
         }
     }
     ContactForce { force_i, torque_i, torque_j, en: g.en, overlap: g.overlap, point: g.point, normal }
+}
+
+/// The `epsd`/`epsd2` torque on i of a contact (see [`rolling_epsd`]) from its geometry and normal
+/// force. LIGGGHTS reads ω_i − ω_j for a pair, and for a wall the surface model's `wr`:
+/// (r − δ/2) ω_i / (r − δ), the rotation at the contact over the centre's distance to the wall.
+#[inline(never)]
+fn rolling_spring(
+    mu_r: f64,
+    model: rolling_epsd::Epsd,
+    g: &Geometry,
+    normal: &NormalForce,
+    lever: f64,
+    roll: RollSpring,
+) -> Vec3 {
+    let (wr, inertia) = if g.wall {
+        (g.wroll * (1.0 / g.r), rolling_epsd::wall_inertia(g.mi, lever))
+    } else {
+        (g.wroll, rolling_epsd::pair_inertia(g.mi, g.ri, g.mj, g.rj))
+    };
+    let r = rolling_epsd::Rolling {
+        mu_r,
+        reff: lever,
+        kn: normal.kn,
+        kt: normal.kt,
+        fnorm: normal.force,
+        inertia,
+        wr,
+        en: g.en,
+    };
+    rolling_epsd::torque(model, &r, roll.dt, roll.spring)
 }
 
 #[inline(always)]
@@ -186,7 +249,7 @@ fn overlapping_pair(
     (dri, drj): (f64, f64),
     (mass_i, mass_j): (f64, f64),
     dt: f64,
-    (shear, delta_max): (&mut Vec3, &mut f64),
+    (shear, delta_max, roll): (&mut Vec3, &mut f64, RollSpring),
 ) -> ContactForce {
     let (ri, rj) = (radius_i + dri, radius_j + drj);
     let r = d.norm_squared().sqrt();
@@ -211,8 +274,10 @@ fn overlapping_pair(
         rj,
         wall: false,
         wroll: omega_i - omega_j,
+        mi: mass_i,
+        mj: mass_j,
     };
-    forces(c, &g, dt, shear, delta_max)
+    forces(c, &g, dt, shear, delta_max, roll)
 }
 
 /// Particle–particle contact. `dri`, `drj` are the multi-contact radius changes of i and j at this
@@ -230,12 +295,23 @@ pub fn particle_particle(
     dt: f64,
     shear: &mut Vec3,
 ) -> Result<Option<ContactForce>, ContactError> {
-    particle_particle_with_history(c, bi, bj, dri, drj, dt, shear, &mut 0.0)
+    particle_particle_with_history(
+        c,
+        bi,
+        bj,
+        dri,
+        drj,
+        dt,
+        shear,
+        &mut 0.0,
+        RollSpring::unused(&mut Vec3::zeros()),
+    )
 }
 
 /// [`particle_particle`] with the normal law's history `delta_max` of the contact (the largest
-/// overlap of `hooke/hysteresis`; unread by the other laws), updated in place and reset to 0 when
-/// the spheres do not overlap.
+/// overlap of `hooke/hysteresis`; unread by the other laws) and the rolling spring `roll`
+/// (`epsd`/`epsd2`; unread by the other models), updated in place and reset to 0 when the spheres
+/// do not overlap.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn particle_particle_with_history(
@@ -247,6 +323,7 @@ pub fn particle_particle_with_history(
     dt: f64,
     shear: &mut Vec3,
     delta_max: &mut f64,
+    roll: RollSpring,
 ) -> Result<Option<ContactForce>, ContactError> {
     let d = bi.x - bj.x;
     let radsum = (bi.radius + dri) + (bj.radius + drj);
@@ -254,6 +331,7 @@ pub fn particle_particle_with_history(
     if rsq >= radsum * radsum {
         *shear = Vec3::zeros();
         *delta_max = 0.0;
+        *roll.spring = Vec3::zeros();
         return Ok(None);
     }
     pair_error(d, radsum, bi.radius.min(bj.radius)).map_or(Ok(()), Err)?;
@@ -266,7 +344,7 @@ pub fn particle_particle_with_history(
         (dri, drj),
         (bi.mass, bj.mass),
         dt,
-        (shear, delta_max),
+        (shear, delta_max, roll),
     );
     if !finite(&cf) {
         return Err(ContactError::NonFinite);
@@ -298,6 +376,8 @@ fn wall_geometry(d: Vec3, r: f64, ri: f64, point: Vec3, vr: Vec3, omega: Vec3, m
         rj: 0.0,
         wall: true,
         wroll: cri * omega,
+        mi: mass,
+        mj: 0.0,
     }
 }
 
@@ -421,6 +501,7 @@ impl CoeffLanes {
             cohesion: 0.0,
             tangential_reduce: false,
             rolling_friction: 0.0,
+            rolling_law: RollingLaw::Cdt,
             damping_ratio_t_n: self.damping_ratio_t_n[l],
         }
     }
@@ -517,7 +598,7 @@ impl Batch for PairLanes {
                 (self.dri[l], self.drj[l]),
                 (self.mass_i[l], self.mass_j[l]),
                 dt,
-                (&mut shear, &mut 0.0),
+                (&mut shear, &mut 0.0, RollSpring::unused(&mut Vec3::zeros())),
             );
             let radsum = (ri + self.dri[l]) + (rj + self.drj[l]);
             self.ok[l] = pair_error(d, radsum, ri.min(rj)).is_none() && finite(&cf);
@@ -533,7 +614,8 @@ impl Batch for PairLanes {
 
 /// Particle–wall contact; the wall is rigid (no radius change on its side). `dri` is the particle's
 /// multi-contact radius change at this contact. Returns `Ok(None)` (and clears the history) when
-/// the modified sphere does not reach the wall.
+/// the modified sphere does not reach the wall. For rolling models without a history (all but
+/// `epsd`/`epsd2`, which need [`particle_wall_with_history`]).
 #[inline]
 pub fn particle_wall(
     c: &PairCoeffs,
@@ -543,11 +625,27 @@ pub fn particle_wall(
     dt: f64,
     shear: &mut Vec3,
 ) -> Result<Option<ContactForce>, ContactError> {
+    particle_wall_with_history(c, bi, wall, dri, dt, shear, RollSpring::unused(&mut Vec3::zeros()))
+}
+
+/// [`particle_wall`] with the contact's rolling spring `roll` (`epsd`/`epsd2`; unread by the
+/// other models), updated in place and reset to 0 when the sphere does not reach the wall.
+#[inline]
+pub fn particle_wall_with_history(
+    c: &PairCoeffs,
+    bi: &Body,
+    wall: &WallPoint,
+    dri: f64,
+    dt: f64,
+    shear: &mut Vec3,
+    roll: RollSpring,
+) -> Result<Option<ContactForce>, ContactError> {
     let ri = bi.radius + dri;
     let d = bi.x - wall.point;
     let rsq = d.norm_squared();
     if rsq >= ri * ri {
         *shear = Vec3::zeros();
+        *roll.spring = Vec3::zeros();
         return Ok(None);
     }
     let r = rsq.sqrt();
@@ -558,7 +656,7 @@ pub fn particle_wall(
     let g = wall_geometry(d, r, ri, wall.point, bi.v - wall.velocity, bi.omega, bi.mass);
     // Walls run laws without a normal history (the decks' `fix wall/gran` refuses
     // `hooke/hysteresis`).
-    let cf = forces(c, &g, dt, shear, &mut 0.0);
+    let cf = forces(c, &g, dt, shear, &mut 0.0, roll);
     if finite(&cf) {
         Ok(Some(cf))
     } else {
@@ -632,7 +730,7 @@ impl Batch for WallLanes {
                 self.mass[l],
             );
             let mut shear = lane3(&self.shear, l);
-            let cf = forces(&c, &g, dt, &mut shear, &mut 0.0);
+            let cf = forces(&c, &g, dt, &mut shear, &mut 0.0, RollSpring::unused(&mut Vec3::zeros()));
             self.ok[l] = r != 0.0 && g.overlap < self.radius[l] && finite(&cf);
             set_lane3(&mut self.force, l, &cf.force_i);
             set_lane3(&mut self.torque, l, &cf.torque_i);

@@ -21,6 +21,7 @@ mod moving_meshes;
 mod mpr_test;
 mod portable;
 mod restart;
+mod rolling_epsd;
 mod rolling_friction;
 mod shear;
 mod sorting;
