@@ -38,6 +38,5 @@ for law in 0 1 2; do
     run "single_particle_plates_law$law" single_particle_plates.in -var law $law -var steps 1500 -var every 50
 done
 run hydrogel_approx hydrogel.in -var law 0 -var stroke 1000 -var strokes 1 -var every 10 \
-    -var out piston.txt -var data "$packing" -var mkey3 geometryTolerance -var mval3 0.01 \
-    -var mkey4 updateEvery -var mval4 4
+    -var out piston.txt -var data "$packing" -var geomtol 0.01 -var mcevery 4
 echo "recorded $(find "$out" -type f | wc -l) files in $out"
