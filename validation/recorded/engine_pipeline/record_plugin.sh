@@ -22,7 +22,7 @@ run() {
     (cd "$work" && "$bin" -in "$deck" -log none -var dir . "$@" \
         | grep -a -v -E -e '^Loop time|Performance:|CPU use|Total wall time|^Memory usage' \
             -e '^(Pair|Neigh|Comm|Output|Modify|Other) +\|' \
-            -e 'Nlocal:|Nghost:|Neighs:|Histogram|Neighbor list builds|Dangerous builds|Ave neighs|Total # of neighbors' > stdout.txt)
+            -e 'time \(%\) =|^Setting up run at|Nlocal:|Nghost:|Neighs:|Histogram|Neighbor list builds|Dangerous builds|Ave neighs|Total # of neighbors' > stdout.txt)
     local dest="$out/$name"
     mkdir -p "$dest"
     (cd "$work" && find . -newer "$root/liggghts_inputs/hydrogel.in" -type f \
