@@ -525,3 +525,87 @@ fn a_step_that_does_not_converge_is_cut_into_halves() {
     let x_replay: Vec<f64> = s.bodies[0].points.x.iter().flat_map(|x| [x[0], x[1]]).collect();
     assert_eq!(x_replay, x_cut);
 }
+
+/// The 3-D snapshot path: a Neo-Hookean cube (2 mm, 4 cells a side) squeezed along z between a
+/// fixed and a descending frictionless plate for 10 steps. Read back by VTK's reader, the last
+/// snapshot has every point of points.csv at its x, y, z (VTK floats), the three extra stress
+/// components of 3-D (`sigma_zz`, `sigma_xz`, `sigma_yz`) and a three-component velocity; the
+/// compression shows where it must (σ_zz < 0 and J < 1 at every point, the top plate's points
+/// moving down), the shear components are orders below σ_zz (frictionless plates: a homogeneous
+/// uniaxial state but for the grid's edges), and the walls are two rectangles (4 corners each)
+/// at their current positions.
+#[test]
+fn vtk_snapshots_of_a_3d_scene_carry_the_third_axis() {
+    let d = tempfile::tempdir().unwrap();
+    let (v, dt, steps) = (-0.5, 1e-5, 10);
+    let scene = format!(
+        r#"{{"dimension": 3, "material": {{"law": "neohookean", "lambda": 3e6, "mu": 1.5e6, "density": 990}},
+            "body": {{"shape": "block", "lo": [0.0, 0.0, 0.0], "hi": [0.002, 0.002, 0.002]}},
+            "grid": {{"h": 5e-4, "points_per_cell": 2, "margin": 2}},
+            "walls": [{{"axis": 2, "side": 1, "position": 0.0}},
+                      {{"axis": 2, "side": -1, "position": 0.002, "velocity": {v}}}],
+            "dt": {dt}, "steps": {steps}}}"#
+    );
+    std::fs::write(d.path().join("cube.json"), scene).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mcdem"))
+        .current_dir(d.path())
+        .args(["mpm", "cube.json", "--out", "out", "--vtk-every", "5"])
+        .output()
+        .expect("mcdem starts");
+    assert!(o.status.success(), "mcdem mpm failed: {}", String::from_utf8_lossy(&o.stderr));
+    let vtk = d.path().join("out/vtk");
+    let csv = std::fs::read_to_string(d.path().join("out/points.csv")).unwrap();
+    let rows: Vec<Vec<f64>> =
+        csv.lines().skip(1).map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 8 * 8 * 8, "4 cells a side, 2 points per cell and axis");
+    let v3 = read_vtk(&[vtk.join(format!("points_{steps}.vtk")), vtk.join(format!("walls_{steps}.vtk"))]);
+    let (last, walls) = (&v3[0], &v3[1]);
+    let pts = last["points"].as_array().unwrap();
+    assert_eq!(pts.len(), rows.len());
+    let pd = &last["point_data"];
+    let col = |name: &str| -> Vec<f64> {
+        pd[name]
+            .as_array()
+            .unwrap_or_else(|| panic!("array {name} missing: {pd}"))
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let (j, szz, sxz, syz) = (col("J"), col("sigma_zz"), col("sigma_xz"), col("sigma_yz"));
+    let vel = pd["velocity"].as_array().unwrap();
+    let szz_max = szz.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+    for (k, r) in rows.iter().enumerate() {
+        for a in 0..3 {
+            let p = pts[k][a].as_f64().unwrap();
+            assert!(
+                (p - r[1 + a]).abs() <= 5e-6 * r[1 + a].abs().max(1e-4),
+                "point {k} axis {a}: {p} vs {}",
+                r[1 + a]
+            );
+        }
+        assert!(szz[k] < 0.0 && j[k] < 1.0, "point {k}: sigma_zz {} J {}", szz[k], j[k]);
+        assert!(
+            sxz[k].abs() < 1e-2 * szz_max && syz[k].abs() < 1e-2 * szz_max,
+            "point {k}: shear {} {}",
+            sxz[k],
+            syz[k]
+        );
+        assert_eq!(vel[k].as_array().unwrap().len(), 3);
+    }
+    // The points near the top plate move down with it; those on the floor stay.
+    let top = (0..rows.len()).max_by(|&a, &b| rows[a][3].total_cmp(&rows[b][3])).unwrap();
+    assert!(vel[top][2].as_f64().unwrap() < 0.1 * v, "top point's vz {}", vel[top][2]);
+    // Walls: two rectangles, the top one at its moved position.
+    assert_eq!(walls["cells"].as_u64(), Some(2));
+    let wp = walls["points"].as_array().unwrap();
+    assert_eq!(wp.len(), 8);
+    let z_top = 0.002 + v * dt * steps as f64;
+    for k in 0..4 {
+        assert!(wp[k][2].as_f64().unwrap().abs() < 1e-12, "floor corner {k}: {:?}", wp[k]);
+        assert!(
+            (wp[4 + k][2].as_f64().unwrap() - z_top).abs() < 1e-8,
+            "top corner {k}: {:?}, want {z_top}",
+            wp[4 + k]
+        );
+    }
+}
