@@ -116,18 +116,18 @@ impl GranModel {
     /// One model setting `key value` of a `pair_style gran` or `fix wall/gran` line; false if `key`
     /// is not a model setting (the caller decides what else it may be).
     pub(super) fn setting(&mut self, key: &str, v: Option<&str>) -> R<bool> {
-        match (key, v) {
-            // The multi-contact settings: one table for this reader and the plugin.
-            (key, Some(x)) if McSetting::from_name(key).is_some() => {
-                let s = McSetting::from_name(key).expect("matched above");
-                let v = s.parse(x)?;
-                match s {
-                    McSetting::MprTest => self.mpr_test = mc_settings::mpr_test(v),
-                    McSetting::PairRadii => self.stock_pair_radii = v != 0.0,
-                    McSetting::GeometryTolerance => self.geometry_tolerance = Some(v),
-                    McSetting::UpdateEvery => self.update_every = Some(v as u64),
-                }
+        // The multi-contact settings: one table for this reader and the plugin.
+        if let (Some(s), Some(x)) = (McSetting::from_name(key), v) {
+            let v = s.parse(x)?;
+            match s {
+                McSetting::MprTest => self.mpr_test = mc_settings::mpr_test(v),
+                McSetting::PairRadii => self.stock_pair_radii = v != 0.0,
+                McSetting::GeometryTolerance => self.geometry_tolerance = Some(v),
+                McSetting::UpdateEvery => self.update_every = Some(v as u64),
             }
+            return Ok(true);
+        }
+        match (key, v) {
             ("mcAccuracy", Some(x)) => self.mc_accuracy = Some(mc_accuracy(x)?),
             ("mcAccuracyCheck", Some("yes")) => self.mc_accuracy_check = Some(true),
             ("mcAccuracyCheck", Some("no")) => self.mc_accuracy_check = Some(false),

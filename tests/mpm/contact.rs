@@ -287,6 +287,22 @@ print(json.dumps(out))
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
+/// A named point array of a snapshot read by [`read_vtk`], as numbers.
+fn point_array(snapshot: &serde_json::Value, name: &str) -> Vec<f64> {
+    let pd = &snapshot["point_data"];
+    pd[name]
+        .as_array()
+        .unwrap_or_else(|| panic!("array {name} missing: {pd}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+/// The rows of a run's `points.csv` (body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy,volume), as numbers.
+fn points_csv_rows(csv: &str) -> Vec<Vec<f64>> {
+    csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect()).collect()
+}
+
 /// `mcdem mpm --vtk-every 10` on the head-on discs between a fixed and a descending plate (25
 /// steps): snapshots at steps 0, 10, 20 and 25, listed with their times t = step·Δt in the
 /// ParaView series files; read back by VTK's reader, the last one has every material point of
@@ -335,10 +351,8 @@ fn vtk_snapshots_read_back_by_python_vtk_match_points_csv() {
 
     // points.csv: body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy,volume.
     let csv = std::fs::read_to_string(d.path().join("out/points.csv")).unwrap();
-    let mut lines = csv.lines();
-    assert_eq!(lines.next().unwrap(), "body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy,volume");
-    let rows: Vec<Vec<f64>> =
-        lines.map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect()).collect();
+    assert_eq!(csv.lines().next().unwrap(), "body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy,volume");
+    let rows = points_csv_rows(&csv);
     assert!(rows.len() > 100, "{} points", rows.len());
 
     let files: Vec<_> = ["points_0.vtk", "points_25.vtk", "walls_0.vtk", "walls_25.vtk"]
@@ -351,14 +365,7 @@ fn vtk_snapshots_read_back_by_python_vtk_match_points_csv() {
     assert_eq!(pts.len(), rows.len(), "point count");
     assert_eq!(last["cells"].as_u64().unwrap() as usize, rows.len(), "one vertex per point");
     let pd = &last["point_data"];
-    let col = |name: &str| -> Vec<f64> {
-        pd[name]
-            .as_array()
-            .unwrap_or_else(|| panic!("array {name} missing: {pd}"))
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect()
-    };
+    let col = |name: &str| point_array(last, name);
     // points.csv prints 10 significant digits, the VTK file 11: equal to 1e-9 relative.
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-30);
     let (body, j, vol, sxx, sxy) = (col("body"), col("J"), col("volume"), col("sigma_xx"), col("sigma_xy"));
@@ -386,8 +393,7 @@ fn vtk_snapshots_read_back_by_python_vtk_match_points_csv() {
     }
     // The discs have been compressed by the collision: J and γ_eq moved away from their values at
     // step 0 (J = 1, γ_eq = 0 everywhere), and the left disc moved right.
-    let j0: Vec<f64> =
-        first["point_data"]["J"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let j0 = point_array(first, "J");
     assert!(j0.iter().all(|&x| x == 1.0), "J at step 0");
     assert!(j.iter().any(|&x| (x - 1.0).abs() > 1e-4), "J unchanged after the collision");
     assert!(col("gamma_eq").iter().any(|&g| g > 1e-4), "no strain after the collision");
@@ -555,22 +561,14 @@ fn vtk_snapshots_of_a_3d_scene_carry_the_third_axis() {
     assert!(o.status.success(), "mcdem mpm failed: {}", String::from_utf8_lossy(&o.stderr));
     let vtk = d.path().join("out/vtk");
     let csv = std::fs::read_to_string(d.path().join("out/points.csv")).unwrap();
-    let rows: Vec<Vec<f64>> =
-        csv.lines().skip(1).map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect()).collect();
+    let rows = points_csv_rows(&csv);
     assert_eq!(rows.len(), 8 * 8 * 8, "4 cells a side, 2 points per cell and axis");
     let v3 = read_vtk(&[vtk.join(format!("points_{steps}.vtk")), vtk.join(format!("walls_{steps}.vtk"))]);
     let (last, walls) = (&v3[0], &v3[1]);
     let pts = last["points"].as_array().unwrap();
     assert_eq!(pts.len(), rows.len());
     let pd = &last["point_data"];
-    let col = |name: &str| -> Vec<f64> {
-        pd[name]
-            .as_array()
-            .unwrap_or_else(|| panic!("array {name} missing: {pd}"))
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect()
-    };
+    let col = |name: &str| point_array(last, name);
     let (j, szz, sxz, syz) = (col("J"), col("sigma_zz"), col("sigma_xz"), col("sigma_yz"));
     let vel = pd["velocity"].as_array().unwrap();
     let szz_max = szz.iter().fold(0.0f64, |m, s| m.max(s.abs()));
