@@ -296,8 +296,8 @@ fn study(s: Study) -> Result<(), String> {
                 Ok(())
             } else {
                 Err(format!(
-                    "{} run(s) stopped for a numerical reason or unclassified (a .failed file written before \
-                     stops were classified: delete it to rerun and classify): {}",
+                    "{} run(s) stopped for a numerical reason or are unclassified (a .failed file the study \
+                     cannot classify: delete it to rerun): {}",
                     other.len(),
                     other.iter().map(|(k, e)| format!("{k}: {e}")).collect::<Vec<_>>().join("; ")
                 ))

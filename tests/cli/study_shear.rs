@@ -3,8 +3,8 @@
 
 use mcdem::physics::pair::ContactError;
 use mcdem::study::shear::{
-    classify, run, run_one, run_refined, Grid, Options, Protocol, RunResult, RunSpec, Stop, NUMERICAL,
-    OUT_OF_RANGE,
+    classify, classify_from, recorded_stop, run, run_one, run_refined, Grid, Options, Protocol, RunResult,
+    RunSpec, Stop, NUMERICAL, OUT_OF_RANGE,
 };
 
 fn grid(name: &str, phi: f64, mu: f64, rates: [f64; 2], window: f64) -> Grid {
@@ -248,6 +248,36 @@ fn dense_frictional_stop_is_out_of_the_model_range_and_hertz_runs_on() {
     // Frictionless: the advanced law runs on (particles slide instead of being held in place).
     let (fl, _) = dense_spec(gm, mpr, 0.0);
     assert!(run_one(&fl, &proto).is_ok());
+}
+
+/// A stop on record from before stops were classified (the `.failed` text of the run at Δt, the
+/// engine's message) gives back that run's place and cause exactly, so classifying it needs Δt/2
+/// only: `classify_from` never runs Δt again and reaches the same verdict as the full
+/// classification above. Fails if the step-to-strain conversion (the compression's steps counted
+/// first) or the parse of the cause were wrong, or if another stop's text were taken for one.
+#[test]
+fn a_stop_on_record_is_classified_from_half_the_step() {
+    let (gm, mpr) = Grid::quick().law(0.5).unwrap();
+    let (spec, proto) = dense_spec(gm, mpr, 1.0);
+    let s1 = run_refined(&spec, &proto, 1).expect_err("stops at Δt");
+    let rec = recorded_stop(&spec, &proto, &format!("{}\n", s1.message)).expect("a recorded range stop");
+    let (g1, g) = (s1.strain.unwrap(), rec.strain.unwrap());
+    // Same step count, two orders of summation: round-off only.
+    assert!((g1 - g).abs() <= 1e-12 * g1, "{g1} {g}");
+    assert!(rec.is_overlap_limit() && rec.message == s1.message);
+    let other = s1.message.replacen("shear:", "compression:", 1);
+    assert!(recorded_stop(&spec, &proto, &other).is_none());
+    assert!(recorded_stop(&spec, &proto, &format!("{OUT_OF_RANGE}: stopped at …: {}", s1.message)).is_none());
+    let cause = s1.message.replace("reached the particle radius", "is large");
+    assert!(recorded_stop(&spec, &proto, &cause).is_none());
+    let mut calls = Vec::new();
+    let e = classify_from(Some(rec), |k| {
+        calls.push(k);
+        run_refined(&spec, &proto, k)
+    })
+    .unwrap_err();
+    assert!(e.starts_with(OUT_OF_RANGE) && e.contains("with Δt/2"), "{e}");
+    assert!(!calls.contains(&1) && calls.first() == Some(&2), "{calls:?}");
 }
 
 /// `classify` on scripted outcomes: converged stops are out of range, moving ones numerical, a stop

@@ -14,6 +14,7 @@
 //! `DIR/report.md`.
 //!
 //! Files: `protocol` (one run), `grid` (the grid and its options), `runs` (the grid's runs),
+//! `recorded_stop` (a stop on record before classification),
 //! `paper` (Tables D.1/D.2), `jamming` (φ_c from the rate data, the quasi-static set per μ),
 //! `surface` (the Eq. 8 fit over the grid), `report` (CSV, plots, report).
 
@@ -22,6 +23,7 @@ mod jamming;
 mod jamming_report;
 mod paper;
 mod protocol;
+mod recorded_stop;
 mod report;
 mod runs;
 mod surface;
@@ -33,9 +35,10 @@ pub use jamming::{
 };
 pub use paper::{paper_values, PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 pub use protocol::{
-    classify, k_n, run_one, run_refined, time_step, time_unit, Protocol, RunResult, RunSpec, Stop, DENSITY,
-    DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START, RESTITUTION, SKIN,
-    YOUNGS_MODULUS,
+    classify, classify_from, k_n, run_one, run_one_from, run_refined, time_step, time_unit, Protocol,
+    RunResult, RunSpec, Stop, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE,
+    PHI_START, RESTITUTION, SKIN, YOUNGS_MODULUS,
 };
+pub use recorded_stop::recorded_stop;
 pub use runs::{run, Summary};
 pub use surface::{jamming_of, phi_c_floor, response_surface, SurfaceRow};

@@ -413,6 +413,13 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
     classify(|refine| run_refined(spec, proto, refine))
 }
 
+/// [`run_one`] for a run whose stop at Δt is already on record (`recorded`, see
+/// [`super::recorded_stop::recorded_stop`]): the run at Δt is deterministic, so only Δt/2 (and Δt/4)
+/// are run to classify it.
+pub fn run_one_from(spec: &RunSpec, proto: &Protocol, recorded: Option<Stop>) -> Result<RunResult, String> {
+    classify_from(recorded, |refine| run_refined(spec, proto, refine))
+}
+
 /// Classifies a run by its stops as Δt is refined (`run(k)` runs at Δt/k):
 /// - it finishes at Δt: its result;
 /// - it stops for another reason than the contact range: that error, with the place;
@@ -422,9 +429,19 @@ pub fn run_one(spec: &RunSpec, proto: &Protocol) -> Result<RunResult, String> {
 ///   error beginning with [`OUT_OF_RANGE`], since the stop converges in Δt: the contact law met its
 ///   limit, not the integrator;
 /// - otherwise an error beginning with [`NUMERICAL`].
-pub fn classify(mut run: impl FnMut(u32) -> Result<RunResult, Stop>) -> Result<RunResult, String> {
-    let mut stops: Vec<Stop> = Vec::new();
-    for refine in [1u32, 2, 4] {
+pub fn classify(run: impl FnMut(u32) -> Result<RunResult, Stop>) -> Result<RunResult, String> {
+    classify_from(None, run)
+}
+
+/// [`classify`] starting from a stop at Δt already known (`recorded`): `run` is then called at Δt/2
+/// and Δt/4 only.
+pub fn classify_from(
+    recorded: Option<Stop>,
+    mut run: impl FnMut(u32) -> Result<RunResult, Stop>,
+) -> Result<RunResult, String> {
+    let refines: &[u32] = if recorded.is_some() { &[2, 4] } else { &[1, 2, 4] };
+    let mut stops: Vec<Stop> = recorded.into_iter().collect();
+    for &refine in refines {
         match run(refine) {
             Ok(mut r) => {
                 r.stopped_at_full_step = stops.first().map(|s| s.strain.unwrap_or(0.0));
@@ -461,6 +478,11 @@ pub fn classify(mut run: impl FnMut(u32) -> Result<RunResult, Stop>) -> Result<R
     }
 }
 
+/// Steps per averaging window of strain at shear rate `gdot` [1/s] and step `dt` [s].
+pub(super) fn steps_per_window(proto: &Protocol, gdot: f64, dt: f64) -> u64 {
+    (proto.window / (gdot * dt)).ceil().max(1.0) as u64
+}
+
 /// One run at the step Δt/`refine` (the study's Δt for `refine` = 1), no retry.
 pub fn run_refined(spec: &RunSpec, proto: &Protocol, refine: u32) -> Result<RunResult, Stop> {
     let t0 = Instant::now();
@@ -469,7 +491,7 @@ pub fn run_refined(spec: &RunSpec, proto: &Protocol, refine: u32) -> Result<RunR
     let gdot = spec.gamma_hat / time_unit(spec.nu);
     let dt = w.dt;
     start_shear(&mut w, gdot, l);
-    let steps_per_window = (proto.window / (gdot * dt)).ceil().max(1.0) as u64;
+    let steps_per_window = steps_per_window(proto, gdot, dt);
     let every = (steps_per_window / proto.samples_per_window.max(1) as u64).max(1);
     let mut windows: Vec<Acc> = Vec::new();
     let mut steady_at: Option<usize> = None;

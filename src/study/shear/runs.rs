@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use super::grid::{read_json, single_thread, write_atomic, CostRow, Options};
 use super::jamming::Jamming;
-use super::protocol::{prepare_sorted, run_one, start_shear, time_unit, RunResult, RunSpec};
+use super::protocol::{prepare_sorted, run_one_from, start_shear, time_unit, RunResult, RunSpec, Stop};
+use super::recorded_stop::recorded_stop;
 use super::report::write_outputs;
 use super::surface::{jamming_of, response_surface, SurfaceRow};
 use crate::harness::progress::Progress;
@@ -35,21 +36,27 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
     let specs = opts.grid.specs()?;
     let proto = &opts.grid.protocol;
     let mut done: Vec<RunResult> = Vec::new();
-    let mut todo: Vec<RunSpec> = Vec::new();
+    // Each run to do, with its stop at Δt when that is on record.
+    let mut todo: Vec<(RunSpec, Option<Stop>)> = Vec::new();
     let mut failed = Vec::new();
+    let running = !(opts.cost_only || opts.report_only);
     for s in specs {
         let key = s.key();
         if let Ok(e) = std::fs::read_to_string(runs_dir.join(format!("{key}.failed"))) {
-            // A run that stopped (deterministic): not retried; delete the file to retry it.
-            failed.push((key, e.trim().to_string()));
+            // A run that stopped (deterministic): not retried; delete the file to retry it. A stop
+            // recorded before stops were classified is classified now from Δt/2 on.
+            match recorded_stop(&s, proto, &e) {
+                Some(stop) if running => todo.push((s, Some(stop))),
+                _ => failed.push((key, e.trim().to_string())),
+            }
             continue;
         }
         match read_json::<RunResult>(&runs_dir.join(format!("{key}.json"))) {
             Some(r) if r.spec == s && &r.protocol == proto => done.push(r),
-            _ => todo.push(s),
+            _ => todo.push((s, None)),
         }
     }
-    if opts.cost_only || opts.report_only {
+    if !running {
         todo.clear();
     }
     let skipped = done.len() + failed.len();
@@ -66,7 +73,7 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
     let say_above = |l: &str| progress.suspend(|| say(l));
     let say_run: &(dyn Fn(&str) + Sync) = &say_above;
     // Longest first (slow shear rates), so the two threads finish together.
-    todo.sort_by(|a, b| a.gamma_hat.total_cmp(&b.gamma_hat).then(b.phi.total_cmp(&a.phi)));
+    todo.sort_by(|(a, _), (b, _)| a.gamma_hat.total_cmp(&b.gamma_hat).then(b.phi.total_cmp(&a.phi)));
     // Exactly `threads` runs at a time: plain worker threads take the next run from a shared
     // index, and each runs it inside its own one-thread pool (the engine's pair loop then stays
     // serial). A rayon pool of pools would let a waiting worker start further runs.
@@ -86,11 +93,11 @@ pub fn run(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<Summary, Strin
                     };
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(s) = todo.get(i) else { break };
+                        let Some((s, recorded)) = todo.get(i) else { break };
                         // The grid coordinates, not the file key (which repeats the law and N).
                         let name = format!("phi={:.3} mu={} nu={} g={:.1e}", s.phi, s.mu, s.nu, s.gamma_hat);
                         progress.start(&name);
-                        let r = pool.install(|| run_one(s, proto));
+                        let r = pool.install(|| run_one_from(s, proto, recorded.clone()));
                         progress.finish(&name);
                         let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
                         mine.push(finish(s, r, k, total, &runs_dir, say_run));
@@ -134,6 +141,8 @@ pub(super) fn finish(
         Ok(r) => {
             let text = serde_json::to_string_pretty(&r).map_err(|e| (s.key(), e.to_string()))?;
             write_atomic(&runs_dir.join(format!("{}.json", s.key())), &text).map_err(|e| (s.key(), e))?;
+            // A stop on record that the smaller steps ran through: the run's result replaces it.
+            let _ = std::fs::remove_file(runs_dir.join(format!("{}.failed", s.key())));
             say(&format!(
                 "[{k}/{total}] φ {:.3} μ {} ν {} γ̂ {:.1e}: p̂ {:.4e} (kin {:.2e}) Z {:.2} {} strain {:.2}, {:.1} s, {:.2e} particle-steps/s",
                 s.phi,
