@@ -188,6 +188,13 @@ int32_t mcdem_particle_wall(const mcdem_pair_coeffs *coeffs, const mcdem_body *b
 /* Keyword of setting k (static string); NULL when k is not a setting. */
 const char *mcdem_setting_name(int32_t k);
 
+/* Keyword k of model mc_advanced that only `mcdem run` implements (the accuracy budget; static
+ * string); NULL past the last one. The plugin refuses these with mcdem_engine_only_why(). */
+const char *mcdem_engine_only_setting(int32_t k);
+
+/* Why the plugin refuses the keywords of mcdem_engine_only_setting (static string). */
+const char *mcdem_engine_only_why(void);
+
 /* Value of setting k when the line does not give it (NaN when k is not a setting). */
 double mcdem_setting_default(int32_t k);
 

@@ -72,11 +72,9 @@ void NormalModel<MC_ADVANCED>::registerSettings(Settings &settings) {
         const char *name = mcdem_setting_name(k);
         if (table.find(name) == table.end()) table[name] = new CoreSetting(k, &settings_[k], &given_[k]);
     }
-    // The accuracy budget runs in `mcdem run` only (its per-particle references live in the Rust
-    // engine's multi-contact pass, not in the C ABI the plugin calls).
-    const char *budget = "the accuracy budget runs in `mcdem run` only; use geometryTolerance/updateEvery here";
-    for (const char *key : {"mcAccuracy", "mcAccuracyCheck"})
-        if (table.find(key) == table.end()) table[key] = new UnsupportedSetting(key, budget);
+    // Keywords only `mcdem run` implements (the library's list and reason).
+    for (int k = 0; const char *key = mcdem_engine_only_setting(k); k++)
+        if (table.find(key) == table.end()) table[key] = new UnsupportedSetting(key, mcdem_engine_only_why());
 }
 
 void NormalModel<MC_ADVANCED>::postSettings(IContactHistorySetup *, ContactModelBase *) {

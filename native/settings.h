@@ -34,8 +34,8 @@ private:
     bool *given_;
 };
 
-// A keyword of `mcdem run`'s model mc_advanced that the plugin does not implement (`mcAccuracy`,
-// `mcAccuracyCheck`): stops the deck with a message naming it, rather than LIGGGHTS's generic
+// A keyword of `mcdem run`'s model mc_advanced that the plugin does not implement (the library's
+// list, mcdem_engine_only_setting): stops the deck with a message naming it, rather than LIGGGHTS's generic
 // unknown-keyword error or, worse, running without the setting.
 class UnsupportedSetting : public Setting {
 public:

@@ -28,7 +28,7 @@ fn keep_abi_symbols() {
 }
 
 /// The functions of [`keep_abi_symbols`], by name (a test holds the names against `native/`).
-fn abi_table() -> [(&'static str, *const c_void); 15] {
+fn abi_table() -> [(&'static str, *const c_void); 17] {
     use crate::ffi::*;
     macro_rules! entries {
         ($($f:ident),* $(,)?) => { [$((stringify!($f), $f as *const c_void)),*] };
@@ -46,6 +46,8 @@ fn abi_table() -> [(&'static str, *const c_void); 15] {
         mcdem_last_error,
         mcdem_material_table,
         mcdem_setting_name,
+        mcdem_engine_only_setting,
+        mcdem_engine_only_why,
         mcdem_setting_default,
         mcdem_setting_parse,
         mcdem_settings_check_wall,

@@ -11,13 +11,27 @@ use super::{
 };
 use crate::physics::ghods2022::MprTest;
 use crate::physics::material::{pair_table, Material};
-use crate::physics::mc_settings::{check_wall, McSetting, MC_SETTINGS};
+use crate::physics::mc_settings::{check_wall, McSetting, ENGINE_ONLY, ENGINE_ONLY_WHY, MC_SETTINGS};
 
 /// Keyword of setting `k` of `model mc_advanced` (`MCDEM_SETTING_*`, `physics::mc_settings`), a
 /// static NUL-terminated string; null when `k` is not a setting (the shim loops until it is).
 #[no_mangle]
 pub extern "C" fn mcdem_setting_name(k: i32) -> *const c_char {
     McSetting::from_index(k).map_or(std::ptr::null(), |s| s.c_name().as_ptr())
+}
+
+/// Keyword `k` of `model mc_advanced` that only `mcdem run` implements
+/// (`physics::mc_settings::ENGINE_ONLY`), a static NUL-terminated string; null past the last one
+/// (the shim loops until it is).
+#[no_mangle]
+pub extern "C" fn mcdem_engine_only_setting(k: i32) -> *const c_char {
+    usize::try_from(k).ok().and_then(|k| ENGINE_ONLY.get(k)).map_or(std::ptr::null(), |s| s.as_ptr())
+}
+
+/// Why the plugin refuses the keywords of [`mcdem_engine_only_setting`] (a static string).
+#[no_mangle]
+pub extern "C" fn mcdem_engine_only_why() -> *const c_char {
+    ENGINE_ONLY_WHY.as_ptr()
 }
 
 /// Value of setting `k` when the deck line does not give it (NaN when `k` is not a setting).

@@ -124,6 +124,17 @@ impl McSetting {
     }
 }
 
+/// Keywords of `model mc_advanced` that only `mcdem run` implements: the accuracy budget, whose
+/// per-particle references live in the Rust engine's multi-contact pass, which the plugin does not
+/// run (it calls the radius changes through the C ABI). The deck reader parses them
+/// (`deck::pair`); the plugin names them as unsupported with [`ENGINE_ONLY_WHY`] rather than
+/// LIGGGHTS's generic unknown-keyword error or, worse, running without them.
+pub const ENGINE_ONLY: [&CStr; 2] = [c"mcAccuracy", c"mcAccuracyCheck"];
+
+/// Why the plugin refuses an [`ENGINE_ONLY`] keyword, and what to use there instead.
+pub const ENGINE_ONLY_WHY: &CStr =
+    c"the accuracy budget runs in `mcdem run` only; use geometryTolerance/updateEvery here";
+
 /// The `mprTest` choice of a value from [`McSetting::parse`].
 pub fn mpr_test(value: f64) -> MprTest {
     if value != 0.0 {

@@ -375,15 +375,19 @@ fn bad_decks_stop_with_one_error_line_naming_the_cause() {
 }
 
 /// The accuracy budget (`mcAccuracy`, docs/dem.md) runs in `mcdem run` only: the plugin stops
-/// naming the keyword rather than run without it.
+/// naming the keyword and the library's reason rather than run without it, for every keyword of
+/// the library's engine-only list (`physics::mc_settings::ENGINE_ONLY`).
 #[test]
 fn accuracy_budget_is_refused_by_the_plugin() {
+    use mcdem::physics::mc_settings::{ENGINE_ONLY, ENGINE_ONLY_WHY};
     let tmp = TempDir::new().unwrap();
     let d = tmp.path();
-    for setting in ["mcAccuracy 1e-3", "mcAccuracyCheck yes"] {
-        let deck = edited_deck(d, |t| t.replace("${mkey3} ${mval3}", setting));
-        let key = setting.split(' ').next().unwrap();
-        expect_error((&deck, vec![]), d, &[key, "is not implemented in the LIGGGHTS plugin"]);
+    let why = ENGINE_ONLY_WHY.to_str().unwrap();
+    let keys: Vec<&str> = ENGINE_ONLY.iter().map(|k| k.to_str().unwrap()).collect();
+    assert_eq!(keys, ["mcAccuracy", "mcAccuracyCheck"], "the budget's keywords (docs/dem.md)");
+    for (key, value) in keys.iter().zip(["1e-3", "yes"]) {
+        let deck = edited_deck(d, |t| t.replace("${mkey3} ${mval3}", &format!("{key} {value}")));
+        expect_error((&deck, vec![]), d, &[key, "is not implemented in the LIGGGHTS plugin", why]);
     }
 }
 
