@@ -281,7 +281,7 @@ fn study(s: Study) -> Result<(), String> {
                 sum.failed.iter().partition(|(_, e)| e.starts_with(shear::OUT_OF_RANGE));
             if !range.is_empty() {
                 println!(
-                    "{} run(s) out of the model's range (stop converged in the time step; listed in the report and stops.csv)",
+                    "{} run(s) out of the model's range (the stop converges in the time step or persists down to a quarter of it; listed in the report and stops.csv)",
                     range.len()
                 );
             }
@@ -290,14 +290,14 @@ fn study(s: Study) -> Result<(), String> {
             } else if report_only {
                 // Rewriting the report does not settle the stops: say so, but the report is written.
                 eprintln!(
-                    "note: {} run(s) stopped for a numerical reason or are unclassified (listed in the report)",
+                    "note: {} run(s) stopped for another cause or are unclassified (listed in the report)",
                     other.len()
                 );
                 Ok(())
             } else {
                 Err(format!(
-                    "{} run(s) stopped for a numerical reason or are unclassified (a .failed file the study \
-                     cannot classify: delete it to rerun): {}",
+                    "{} run(s) stopped for another cause than the contact law's range or are unclassified (a \
+                     .failed file the study cannot classify: delete it to rerun): {}",
                     other.len(),
                     other.iter().map(|(k, e)| format!("{k}: {e}")).collect::<Vec<_>>().join("; ")
                 ))

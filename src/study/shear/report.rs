@@ -8,7 +8,7 @@ use super::jamming::{key3, Jamming};
 use super::jamming_report::{jamming_section, rate_exponent_chart};
 use super::paper::{PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 use super::protocol::{
-    RunResult, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START,
+    time_step, RunResult, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, OUT_OF_RANGE, PHI_START,
     YOUNGS_MODULUS,
 };
 use super::surface::{qs_points, SurfaceRow};
@@ -459,10 +459,11 @@ pub(super) fn report(
             let _ = writeln!(
                 s,
                 "\n## Runs that stopped\n\nA run that stops at the contact law's limit (an overlap reaches a \
-                 radius) is run again at Δt/2. *{OUT_OF_RANGE}*: it stops again at the same place, so the stop \
-                 converges in Δt and the state lies beyond what the law can represent (a result about the \
-                 model, not a failure). *{NUMERICAL}*: it moved with Δt. Runs that finished at Δt/2 are listed \
-                 too: their results above are from the Δt/2 run. All of them are in stops.csv.\n\n\
+                 radius) is run again at Δt/2 (and Δt/4 when the two stops differ). *{OUT_OF_RANGE}*: it stops \
+                 again at the same place (the stop converges in Δt), or at every step down to Δt/4, so the \
+                 state lies beyond what the law can represent (a result about the model, not a failure). Runs \
+                 that finished at Δt/2 or Δt/4 are listed too: their stop at Δt was the step's, and their \
+                 results above are from the smaller step. All of them are in stops.csv.\n\n\
                  | run | class | cause |\n|---|---|---|"
             );
             for (k, e) in failed {
@@ -522,22 +523,22 @@ pub(super) fn report(
 fn stop_class(e: &str) -> &'static str {
     if e.starts_with(OUT_OF_RANGE) {
         OUT_OF_RANGE
-    } else if e.starts_with(NUMERICAL) {
-        NUMERICAL
     } else {
         "unclassified"
     }
 }
 
-/// stops.csv: every run that stopped, and every run that finished only at Δt/2.
+/// stops.csv: every run that stopped, and every run that finished only at Δt/2 or Δt/4.
 fn stops_csv(results: &[RunResult], failed: &[(String, String)]) -> String {
     let mut s = String::from("run,class,stopped_at_full_step,message\n");
     for (k, e) in failed {
         let _ = writeln!(s, "{k},{},,\"{}\"", stop_class(e), e.replace('"', "'"));
     }
     for r in results.iter().filter(|r| r.stopped_at_full_step.is_some()) {
-        let _ =
-            writeln!(s, "{},finished at dt/2,{},", r.spec.key(), r.stopped_at_full_step.unwrap_or(f64::NAN));
+        // The step it finished at, as a divisor of the study's step (the run keeps its dt).
+        let k = (time_step(r.spec.nu) / r.dt).round();
+        let at = r.stopped_at_full_step.unwrap_or(f64::NAN);
+        let _ = writeln!(s, "{},finished at dt/{k},{at},", r.spec.key());
     }
     s
 }
