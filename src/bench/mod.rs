@@ -238,6 +238,16 @@ fn targets(r: &Report) -> Vec<Target> {
             }
         }
     }
+    // The exact-MC speed issue's targets (docs/bench.md): exact `mc_advanced` within 2.5× Hertz on
+    // one thread, and the 514-particle deck 1.6× faster on two threads than on one.
+    if let Some(&v) = r.ratios.get("rust 1 thread: mc_advanced / hertz") {
+        push("hydrogel, rust 1 thread: cost exact mc_advanced / hertz".into(), v, "<=", 2.5);
+    }
+    for m in [ModelKind::Hertz.name(), ModelKind::McAdvanced.name()] {
+        if let Some(&v) = r.ratios.get(&format!("rust: {m} 2 threads / 1 thread")) {
+            push(format!("hydrogel, rust {m}: speed-up 2 threads / 1 thread"), 1.0 / v, ">=", 1.6);
+        }
+    }
     if let Some(&v) = r.ratios.get("hertz: rust 1 thread / liggghts") {
         push("hydrogel hertz: speed-up rust 1 thread / liggghts 1 rank".into(), 1.0 / v, ">=", 1.5);
     }
@@ -302,6 +312,7 @@ fn ratios(r: &mut Report) {
         ("hertz: rust 2 threads / liggghts 2 ranks", ("rust", hertz, 2), ("liggghts", hertz, 2)),
         ("liggghts: hertz 2 ranks / 1 rank", ("liggghts", hertz, 2), ("liggghts", hertz, 1)),
         ("rust: hertz 2 threads / 1 thread", ("rust", hertz, 2), ("rust", hertz, 1)),
+        ("rust: mc_advanced 2 threads / 1 thread", ("rust", advanced, 2), ("rust", advanced, 1)),
         ("mc_advanced: rust 1 thread / liggghts", ("rust", advanced, 1), ("liggghts", advanced, 1)),
     ];
     for (name, (e1, m1, t1), (e2, m2, t2)) in pairs {
@@ -451,6 +462,34 @@ mod tests {
         assert_eq!((two.value, two.met), (3.0, true));
         let slow = targets(&merge(vec![round(4.0, 5.0, 8.0)]));
         assert!(!slow.iter().find(|x| x.name.contains("rust 1 thread")).unwrap().met, "1.25 < 1.5");
+    }
+
+    /// The exact-MC issue's rows: cost of exact `mc_advanced` against Hertz on one thread (≤ 2.5)
+    /// and each law's speed-up on two threads (≥ 1.6), both at their bounds and beside them.
+    #[test]
+    fn exact_mc_cost_and_two_thread_speed_up_targets() {
+        let rate = |model: ModelKind, threads: usize, rate: f64| Row {
+            model: model.into(),
+            ..row("rust", threads, rate)
+        };
+        let (h, mc) = (ModelKind::Hertz, ModelKind::McAdvanced);
+        let mut r = Report {
+            rows: vec![rate(h, 1, 10.0), rate(mc, 1, 4.0), rate(h, 2, 15.0), rate(mc, 2, 6.4)],
+            ..Default::default()
+        };
+        ratios(&mut r);
+        let t = targets(&r);
+        let get = |name: &str| t.iter().find(|x| x.name == name).unwrap_or_else(|| panic!("{name}: {t:?}"));
+        let cost = get("hydrogel, rust 1 thread: cost exact mc_advanced / hertz");
+        assert_eq!((cost.value, cost.relation, cost.bound, cost.met), (2.5, "<=", 2.5, true));
+        let hertz = get("hydrogel, rust hertz: speed-up 2 threads / 1 thread");
+        // Speed-ups are inverses of cost ratios: equal to 1.5 and 1.6 to rounding.
+        assert!((hertz.value - 1.5).abs() < 1e-12 && (hertz.bound, hertz.met) == (1.6, false), "{hertz:?}");
+        let advanced = get("hydrogel, rust mc_advanced: speed-up 2 threads / 1 thread");
+        assert!((advanced.value - 1.6).abs() < 1e-12 && advanced.relation == ">=", "{advanced:?}");
+        r.rows[1].particle_steps_per_s = 3.9;
+        ratios(&mut r);
+        assert!(!targets(&r).iter().find(|x| x.name.contains("cost exact")).unwrap().met, "2.56 > 2.5");
     }
 
     #[test]

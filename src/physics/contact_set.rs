@@ -281,13 +281,9 @@ pub fn influence(p: &McParams, contacts: &[ContactLoad], g: &mut [f64]) -> Resul
         // Unit sources: the threshold and the cap play no part.
         s.run::<NO_CAP>(Pass::Influence, contacts, pref, 0.0, nu);
         let st = s.stride;
-        for a in 0..n {
-            g[a * n + a] = 0.0;
-            let (up, back) = (&s.up[a * st..][a + 1..n], &s.back[a * st..][a + 1..n]);
-            for (b, (&t_ab, &t_ba)) in (a + 1..n).zip(up.iter().zip(back)) {
-                g[a * n + b] = t_ab;
-                g[b * n + a] = t_ba;
-            }
+        for (a, row) in g[..n * n].chunks_exact_mut(n.max(1)).enumerate() {
+            // The diagonal of `terms` is zero, as g's must be.
+            row.copy_from_slice(&s.terms[a * st..][..n]);
         }
     });
     Ok(())
@@ -492,7 +488,7 @@ thread_local! {
 const LANES: usize = 4;
 
 /// The contacts of one particle by component (structure of arrays), padded with [`LANES`] zero
-/// contacts, and the terms of Eq. 2 between them in two row-major triangles.
+/// contacts, and the terms of Eq. 2 between them in one row-major matrix (source by target).
 ///
 /// Why this shape: a particle has few contacts (4–16), so a loop over the pairs of one row is
 /// short, and a compiled loop of unknown length spends more time in its remainder and alias checks
@@ -512,12 +508,20 @@ struct Scratch {
     len: Vec<f64>,
     /// Source weight −γ(1+ν)/(2πE) · F_k; zero for an unloaded contact (it exerts nothing).
     w: Vec<f64>,
-    /// Row stride of `up` and `back`: n + [`LANES`], so that the last chunk of a row fits.
+    /// Row stride of `terms`: n + [`LANES`], so that the last chunk of a row fits.
     stride: usize,
-    /// `up[a·stride + b]` = t_{a→b} for b > a: the term source a adds at the later contact b.
-    up: Vec<f64>,
-    /// `back[a·stride + b]` = t_{b→a} for b > a: the term the later contact b adds at a.
-    back: Vec<f64>,
+    /// `terms[k·stride + c]` = t_{k→c}: the term source k adds at target c, zero on the
+    /// diagonal, n + [`LANES`] rows (the last chunk of a row writes its column into padding rows).
+    /// Sources run down the rows, so [`Scratch::sums`] adds each target's terms in increasing
+    /// source index with whole aligned chunks of targets.
+    terms: Vec<f64>,
+    /// Per contact count n, the chunks [`Scratch::rows`] evaluates, as (a, b0): source a and the
+    /// first target b0 of `LANES` consecutive targets, row by row in the order of the nested loops
+    /// they replace. Built once per n seen; one flat loop over them has a fixed trip count per n,
+    /// where nested loops over rows of 1–4 chunks mispredict the end of nearly every row.
+    chunks: Vec<Vec<[u32; 2]>>,
+    /// Lanes per chunk the lists in `chunks` were built for.
+    chunks_width: usize,
     /// Radius change per contact (n + [`LANES`], the padding never read).
     delta: Vec<f64>,
     /// Largest neighbour term received so far, in the cap's measure (starts at 0).
@@ -527,8 +531,9 @@ struct Scratch {
 impl Scratch {
     /// Points, normals and source weights pref·F_k, padded with zero contacts; `unit_sources`
     /// gives every contact the weight pref whatever its force (the influence matrix, which the
-    /// forces multiply later). Sizes the term rows (`up` zeroed: [`Scratch::sums`] reads whole
-    /// aligned chunks of it). The normals n = −p/|p| are divided out `L::WIDTH` contacts at a time.
+    /// forces multiply later). Sizes the term matrix (not cleared: [`Scratch::rows`] writes every
+    /// entry that [`Scratch::sums`] reads for a contact). The normals n = −p/|p| and the weights
+    /// are formed `L::WIDTH` contacts at a time.
     #[inline(always)]
     fn load<L: Lane>(&mut self, contacts: &[ContactLoad], pref: f64, threshold: f64, unit_sources: bool) {
         let n = contacts.len();
@@ -551,15 +556,17 @@ impl Scratch {
             v[n..len].fill(0.0);
         }
         self.stride = len;
-        self.up.clear();
-        self.up.resize(n * len, 0.0);
-        // Lengths only: `rows` writes every entry of `back`, `sums` every entry of `delta` and
-        // `peak` that is read.
-        self.back.resize(n * len, 0.0);
+        // Length only: `rows` writes every entry of `terms` and `sums` every entry of `delta` and
+        // `peak` that is read for a contact.
+        if self.terms.len() < len * len {
+            self.terms.resize(len * len, 0.0);
+        }
         self.delta.resize(len, 0.0);
         self.peak.resize(len, 0.0);
         for (k, c) in contacts.iter().enumerate() {
             (self.px[k], self.py[k], self.pz[k]) = (c.point.x, c.point.y, c.point.z);
+            // The force for now; the weight replaces it below.
+            self.w[k] = c.force;
         }
         // |p| `L::WIDTH` contacts at a time, with the operations of `Vec3::norm` (x² + y² + z² in
         // that order, then the square root): the same bits.
@@ -569,19 +576,7 @@ impl Scratch {
             (x * x + y * y + z * z).sqrt().store(&mut self.len[k0..]);
             k0 += L::WIDTH;
         }
-        for (k, c) in contacts.iter().enumerate() {
-            let l = self.len[k];
-            // A point at the centre has no normal: zero normal and weight make the contact
-            // neither exert nor receive a term (every term carries a normal or the weight).
-            self.w[k] = if l > 0.0 && unit_sources {
-                pref
-            } else if l > 0.0 && c.force > threshold {
-                pref * c.force
-            } else {
-                0.0
-            };
-        }
-        let zero = L::splat(0.0);
+        let (zero, pref_l, threshold) = (L::splat(0.0), L::splat(pref), L::splat(threshold));
         let mut k0 = 0;
         while k0 < n {
             let l = L::load(&self.len[k0..]);
@@ -589,6 +584,12 @@ impl Scratch {
             for (p, nrm) in [(&self.px, &mut self.nx), (&self.py, &mut self.ny), (&self.pz, &mut self.nz)] {
                 L::select(has_normal, L::load(&p[k0..]).neg() / l, zero).store(&mut nrm[k0..]);
             }
+            // A point at the centre has no normal: zero normal and weight make the contact
+            // neither exert nor receive a term (every term carries a normal or the weight). An
+            // unloaded contact exerts nothing. The padding (force and length 0) gets weight 0.
+            let f = L::load(&self.w[k0..]);
+            let weight = if unit_sources { pref_l } else { L::select(f.gt(threshold), pref_l * f, zero) };
+            L::select(has_normal, weight, zero).store(&mut self.w[k0..]);
             k0 += L::WIDTH;
         }
     }
@@ -645,46 +646,59 @@ impl Scratch {
     }
 
     /// Eq. 2's bracket over the chord, both ways, for every unordered pair (a, b > a) of the first
-    /// `n` contacts, times the source weights: t_{a→b} into `up`, t_{b→a} into `back`, row a.
-    /// Rows run in whole chunks of `L::WIDTH` pairs (see [`Scratch`]).
+    /// `n` contacts, times the source weights: t_{a→b} along row a of `terms`, t_{b→a} down its
+    /// column a (one value per lane), and zeros on the diagonal. Pairs run in whole chunks of
+    /// `L::WIDTH` along row a (see [`Scratch`]).
     #[inline(always)]
     fn rows<L: Lane>(&mut self, n: usize, nu: f64) {
         let s = self.stride;
         let (px, py, pz) = (&self.px[..n + LANES], &self.py[..n + LANES], &self.pz[..n + LANES]);
         let (nx, ny, nz) = (&self.nx[..n + LANES], &self.ny[..n + LANES], &self.nz[..n + LANES]);
         let w = &self.w[..n + LANES];
-        for a in 0..n.saturating_sub(1) {
+        let terms = &mut self.terms[..(n + LANES) * s];
+        for a in 0..n {
+            terms[a * s + a] = 0.0;
+        }
+        if self.chunks_width != L::WIDTH {
+            self.chunks.clear();
+            self.chunks_width = L::WIDTH;
+        }
+        if self.chunks.len() <= n {
+            self.chunks.resize_with(n + 1, Vec::new);
+        }
+        let chunks = &mut self.chunks[n];
+        if chunks.is_empty() && n > 1 {
+            for a in 0..n - 1 {
+                chunks.extend((a + 1..n).step_by(L::WIDTH).map(|b0| [a as u32, b0 as u32]));
+            }
+        }
+        for &[a, b0] in chunks.iter() {
+            let (a, b0) = (a as usize, b0 as usize);
             let pa = [L::splat(px[a]), L::splat(py[a]), L::splat(pz[a])];
             let na = [L::splat(nx[a]), L::splat(ny[a]), L::splat(nz[a])];
-            let wa = L::splat(w[a]);
-            let (up, back) = (&mut self.up[a * s..][..s], &mut self.back[a * s..][..s]);
-            let mut b0 = a + 1;
-            while b0 < n {
-                let pb = [L::load(&px[b0..]), L::load(&py[b0..]), L::load(&pz[b0..])];
-                let nb = [L::load(&nx[b0..]), L::load(&ny[b0..]), L::load(&nz[b0..])];
-                let (a_c, b_c, ab, d2) = chord(pa, na, pb, nb);
-                let (g_ab, g_ba) = bracket_pair_over_chord(a_c, b_c, ab, d2, nu);
-                (g_ab * wa).store(&mut up[b0..]);
-                (g_ba * L::load(&w[b0..])).store(&mut back[b0..]);
-                b0 += L::WIDTH;
-            }
+            let pb = [L::load(&px[b0..]), L::load(&py[b0..]), L::load(&pz[b0..])];
+            let nb = [L::load(&nx[b0..]), L::load(&ny[b0..]), L::load(&nz[b0..])];
+            let (a_c, b_c, ab, d2) = chord(pa, na, pb, nb);
+            let (g_ab, g_ba) = bracket_pair_over_chord(a_c, b_c, ab, d2, nu);
+            (g_ab * L::splat(w[a])).store(&mut terms[a * s + b0..]);
+            (g_ba * L::load(&w[b0..])).store_column(&mut terms[b0 * s + a..], s);
         }
     }
 
     /// Δ_c = Σ_k t_{k→c} and the cap's peaks for the first `n` contacts, every target summing its
-    /// terms in increasing source index: first the earlier sources, down the columns of `up` in
-    /// aligned chunks of targets held in registers (`up` is zero where a source does not precede
-    /// a target, and adding +0 changes no sum), then each target's own row of `back`, in order.
+    /// terms in increasing source index: down the columns of `terms` in aligned chunks of targets
+    /// held in registers. The sum starts at +0 and so is never −0, hence adding the diagonal's +0
+    /// changes no bit: each Δ_c is 0 + t_{0→c} + … in that order, skipping k = c.
     #[inline(always)]
     fn sums<L: Lane, const CAP: u8>(&mut self, n: usize) {
         let s = self.stride;
         let (delta, peak) = (&mut self.delta[..n + LANES], &mut self.peak[..n + LANES]);
+        let terms = &self.terms[..n * s];
         let mut c0 = 0;
         while c0 < n {
             let (mut acc, mut pk) = (L::splat(0.0), L::splat(0.0));
-            // Sources before the chunk's last target (and before the last contact).
-            for a in 0..(c0 + L::WIDTH - 1).min(n - 1) {
-                let t = L::load(&self.up[a * s + c0..]);
+            for row in terms.chunks_exact(s) {
+                let t = L::load(&row[c0..]);
                 acc = acc + t;
                 if CAP != NO_CAP {
                     pk = peak_of::<L, CAP>(pk, t);
@@ -693,18 +707,6 @@ impl Scratch {
             acc.store(&mut delta[c0..]);
             pk.store(&mut peak[c0..]);
             c0 += L::WIDTH;
-        }
-        for a in 0..n {
-            let back = &self.back[a * s..][a + 1..n];
-            let (mut acc, mut pk) = (delta[a], peak[a]);
-            for &t in back {
-                acc += t;
-                if CAP != NO_CAP {
-                    pk = peak_of::<f64, CAP>(pk, t);
-                }
-            }
-            delta[a] = acc;
-            peak[a] = pk;
         }
     }
 

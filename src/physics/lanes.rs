@@ -20,6 +20,8 @@ pub trait Lane:
     fn load(s: &[f64]) -> Self;
     /// Into the first [`Lane::WIDTH`] values of `s`.
     fn store(self, s: &mut [f64]);
+    /// Lane l into `s[l · stride]` (a column of a row-major matrix).
+    fn store_column(self, s: &mut [f64], stride: usize);
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
     /// −x (the sign flipped, as Rust's unary minus).
@@ -43,6 +45,10 @@ impl Lane for f64 {
     }
     #[inline(always)]
     fn store(self, s: &mut [f64]) {
+        s[0] = self;
+    }
+    #[inline(always)]
+    fn store_column(self, s: &mut [f64], _stride: usize) {
         s[0] = self;
     }
     #[inline(always)]
@@ -125,6 +131,19 @@ mod avx {
         fn store(self, s: &mut [f64]) {
             let s = &mut s[..4];
             unsafe { _mm256_storeu_pd(s.as_mut_ptr(), self.0) }
+        }
+        #[inline(always)]
+        fn store_column(self, s: &mut [f64], stride: usize) {
+            let s = &mut s[..3 * stride + 1];
+            let (lo, hi) = unsafe { (_mm256_castpd256_pd128(self.0), _mm256_extractf128_pd::<1>(self.0)) };
+            let p = s.as_mut_ptr();
+            // In bounds: the slice holds index 3·stride (checked just above).
+            unsafe {
+                _mm_storel_pd(p, lo);
+                _mm_storeh_pd(p.add(stride), lo);
+                _mm_storel_pd(p.add(2 * stride), hi);
+                _mm_storeh_pd(p.add(3 * stride), hi);
+            }
         }
         #[inline(always)]
         fn sqrt(self) -> Self {

@@ -2,7 +2,7 @@
 //! never give NaN or infinity (coincident and antipodal contacts, ν = 0.5, zero forces included),
 //! the cap limits hold exactly, and the pair force obeys Newton's third law and torque balance.
 
-use mcdem::physics::brodu2015::displacement;
+use mcdem::physics::brodu2015::{bracket_pair_over_chord, compliance_prefactor, displacement};
 use mcdem::physics::contact_set::{influence, radius_changes, radius_changes_with, ContactLoad, McParams};
 use mcdem::physics::ghods2022::{Cap, MprTest};
 use mcdem::physics::hertz::Tangential;
@@ -134,6 +134,41 @@ proptest! {
                 _ => prop_assert!(!fb[c]),
             }
             prop_assert!((d[c] - sum).abs() <= 1e-12 * scale, "contact {}: kernel {} vs terms {} (scale {})", c, d[c], sum, scale);
+        }
+    }
+
+    /// The kernel's summation, bit for bit: each Δ_c is +0 + t_{0→c} + t_{1→c} + … (k ≠ c) in
+    /// increasing source index, every term the one-division bracket of its pair times the source
+    /// weight pref·F_k, written out here pair by pair on plain f64 (the kernel evaluates four
+    /// pairs per instruction and stores them in a matrix). Any change of the order in which the
+    /// kernel adds its terms, or of a term's operations, changes bits here (and in the engine's
+    /// pinned outputs); the rounding of the result is thereby fixed, not only its value to 1e-12.
+    #[test]
+    fn kernel_sums_its_terms_in_source_order_bit_for_bit(p in params(), cs in prop::collection::vec(contact(), 0..20)) {
+        let n = cs.len();
+        let (mut d, mut fb) = (vec![f64::NAN; n], vec![false; n]);
+        radius_changes(&McParams { cap: None, ..p }, &cs, &mut d, &mut fb).unwrap();
+        let (nu, threshold) = (p.poisson_ratio, p.loaded_threshold());
+        let pref = compliance_prefactor(p.gamma, p.youngs_modulus, nu);
+        let len = |q: &Vec3| (q.x * q.x + q.y * q.y + q.z * q.z).sqrt();
+        let normal = |q: &Vec3| { let l = len(q); if l > 0.0 { Vec3::new(-q.x / l, -q.y / l, -q.z / l) } else { Vec3::zeros() } };
+        let weight = |c: &ContactLoad| if len(&c.point) > 0.0 && c.force > threshold { pref * c.force } else { 0.0 };
+        // t_{k→c} of Eq. 2 as the kernel forms it: the pair (a, b) = (min, max), bracket over the chord.
+        let term = |k: usize, c: usize| {
+            let (a, b) = (k.min(c), k.max(c));
+            let (pa, pb, na, nb) = (cs[a].point, cs[b].point, normal(&cs[a].point), normal(&cs[b].point));
+            let (cx, cy, cz) = (pb.x - pa.x, pb.y - pa.y, pb.z - pa.z);
+            let d2 = cx * cx + cy * cy + cz * cz;
+            let a_c = na.x * cx + na.y * cy + na.z * cz;
+            let b_c = nb.x * cx + nb.y * cy + nb.z * cz;
+            let ab = na.x * nb.x + na.y * nb.y + na.z * nb.z;
+            let (g_ab, g_ba) = bracket_pair_over_chord::<f64>(a_c, b_c, ab, d2, nu);
+            if k == a { g_ab * weight(&cs[a]) } else { g_ba * weight(&cs[b]) }
+        };
+        let active = n >= 2 && p.gamma != 0.0 && cs.iter().any(|c| c.force > threshold);
+        for (c, dc) in d.iter().enumerate() {
+            let want = if active { (0..n).filter(|&k| k != c).fold(0.0, |acc, k| acc + term(k, c)) } else { 0.0 };
+            prop_assert_eq!(dc.to_bits(), want.to_bits(), "contact {} of {}: kernel {:e} vs in order {:e}", c, n, dc, want);
         }
     }
 
