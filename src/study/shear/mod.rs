@@ -33,9 +33,9 @@ pub use jamming::{
 };
 pub use paper::{paper_values, PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 pub use protocol::{
-    classify, k_n, run_one, run_refined, time_step, time_unit, Protocol, RunResult, RunSpec, Stop, DENSITY,
-    DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START, RESTITUTION, SKIN,
-    YOUNGS_MODULUS,
+    classify, k_n, run_one, run_refined, sheared_start, time_step, time_unit, Protocol, RunResult, RunSpec,
+    Stop, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, NUMERICAL, OUT_OF_RANGE, PHI_START, RESTITUTION,
+    SKIN, YOUNGS_MODULUS,
 };
 pub use runs::{run, Summary};
 pub use surface::{jamming_of, phi_c_floor, response_surface, SurfaceRow};
