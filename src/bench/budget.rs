@@ -52,6 +52,9 @@ pub struct FrontRow {
     /// measured ≤ bound ≤ EPS (the run stops anyway if a particle's error exceeds its bound).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bound_held: Option<bool>,
+    /// Share of the budget's exact evaluations by reason (docs/dem.md, "Accuracy budget").
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub exact_by_reason: Vec<(String, f64)>,
     /// Cost over that of the cheapest fixed setting whose error is at least this row's (budget
     /// rows; None when every fixed setting is more accurate).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -171,6 +174,7 @@ fn front(opts: &Options, scene: &str, say: &mut dyn FnMut(&str)) -> Result<Front
             cost_range,
             error: (*s != Setting::Hertz).then(|| error(scene, &exact, &o.samples)),
             recomputed: o.recomputed,
+            exact_by_reason: o.why.clone(),
             measured: None,
             bound: None,
             bound_held: None,
@@ -316,6 +320,11 @@ pub fn table(fronts: &[Front]) -> String {
         for r in &f.rows {
             s.push_str(&format!("  {}\n", line(r)));
         }
+        for r in f.rows.iter().filter(|r| !r.exact_by_reason.is_empty()) {
+            let parts: Vec<String> =
+                r.exact_by_reason.iter().map(|(k, v)| format!("{k} {:.1} %", 100.0 * v)).collect();
+            s.push_str(&format!("  {}: exact evaluations by reason: {}\n", r.setting, parts.join(", ")));
+        }
         if let Some(p) = &f.png {
             s.push_str(&format!("  plot: {p}\n"));
         }
@@ -440,6 +449,7 @@ mod tests {
             cost_range: None,
             error: Some(error),
             recomputed: None,
+            exact_by_reason: Vec::new(),
             measured: None,
             bound: None,
             bound_held: None,

@@ -72,6 +72,8 @@ pub struct Outcome {
     /// Shadow check: largest measured radius-change error and largest bound, both relative to the
     /// particle's scale.
     pub checked: Option<(f64, f64)>,
+    /// Share of the exact evaluations by reason (`engine::BUDGET_WHY` names), budget settings.
+    pub why: Vec<(String, f64)>,
 }
 
 /// The scenes, in the order they run.
@@ -132,11 +134,19 @@ pub fn run(scene: &str, quick: bool, setting: Setting, check: bool) -> Result<Ou
         }
         let cpu_s = thread_cpu_s() - t0;
         let st = w.take_budget_stats();
+        let exact: u64 = st.why.iter().sum();
+        let why = crate::engine::BUDGET_WHY
+            .iter()
+            .zip(st.why)
+            .filter(|(_, c)| *c > 0)
+            .map(|(name, c)| (name.to_string(), c as f64 / exact as f64))
+            .collect();
         Ok(Outcome {
             cpu_s,
             samples,
             recomputed: (w.mc_accuracy > 0.0).then(|| st.recomputed as f64 / (st.multi as f64).max(1.0)),
             checked: (st.checks > 0).then_some((st.worst_measured, st.worst_checked_bound)),
+            why,
         })
     })
 }
@@ -226,7 +236,36 @@ fn hydrogel(quick: bool, setting: Setting, check: bool) -> Result<Outcome, Strin
         (Some(b), Some(a)) => a - b,
         _ => crate::outputs::loop_totals(&text).ok_or("hydrogel: no 'Loop time' line")?.seconds,
     };
-    Ok(Outcome { cpu_s, samples, recomputed: budget_recomputed(&text), checked: budget_checked(&text) })
+    Ok(Outcome {
+        cpu_s,
+        samples,
+        recomputed: budget_recomputed(&text),
+        checked: budget_checked(&text),
+        why: budget_why(&text),
+    })
+}
+
+/// Mean over the deck's runs (strokes of equal length) of each reason's share in "exact
+/// evaluations by reason: NAME X %, …" (a run without a reason counts 0 for it).
+fn budget_why(text: &str) -> Vec<(String, f64)> {
+    let lines: Vec<&str> = text
+        .lines()
+        .filter_map(|l| l.split("exact evaluations by reason: ").nth(1)?.split(')').next())
+        .collect();
+    crate::engine::BUDGET_WHY
+        .iter()
+        .filter_map(|name| {
+            let sum: f64 = lines
+                .iter()
+                .filter_map(|l| {
+                    l.split(", ").find_map(|p| {
+                        p.strip_prefix(name)?.trim().strip_suffix('%')?.trim().parse::<f64>().ok()
+                    })
+                })
+                .sum::<f64>();
+            (sum > 0.0).then(|| (name.to_string(), sum / lines.len() as f64 / 100.0))
+        })
+        .collect()
 }
 
 /// Mean over the deck's runs of "recomputed in X %" (the runs are strokes of equal length).
@@ -349,5 +388,13 @@ Loop time of 1 on 1 procs for 10 steps with 5 atoms, multi-contact accuracy 1e-2
         assert!((budget_recomputed(text).unwrap() - 0.3).abs() < 1e-12);
         assert_eq!(budget_checked(text), Some((2e-3, 4e-3)));
         assert_eq!(budget_checked("Loop time of 1"), None);
+        let why = "x, largest estimated error 0.9 of the budget (exact evaluations by reason: no reference 10.0 %, back-off 90.0 %), accuracy\n\
+y (exact evaluations by reason: no reference 30.0 %, contact set changed 70.0 %)\n";
+        let got = budget_why(why);
+        let share = |n: &str| got.iter().find(|(k, _)| k == n).map(|x| x.1);
+        assert!((share("no reference").unwrap() - 0.2).abs() < 1e-12, "{got:?}");
+        assert!((share("back-off").unwrap() - 0.45).abs() < 1e-12, "{got:?}");
+        assert!((share("contact set changed").unwrap() - 0.35).abs() < 1e-12, "{got:?}");
+        assert_eq!(share("Eq. 3 cap"), None);
     }
 }
