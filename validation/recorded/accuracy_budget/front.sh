@@ -13,5 +13,8 @@ start=$(date +%s)
 "$mcdem" bench --scene budget --rounds 2 --plots "$here" --json "$here/front.json" \
   > "$here/front.txt" 2> "$here/front_stderr.txt"
 end=$(date +%s)
+# Keep the progress lines of each run, drop the progress bar's redraws.
+tr '\r' '\n' < "$here/front_stderr.txt" | grep -a -v '^bench: \|^$' > "$here/front_stderr.tmp" || true
+mv "$here/front_stderr.tmp" "$here/front_stderr.txt"
 echo "wall time: $((end - start)) s ($(date -u +%Y-%m-%dT%H:%M:%SZ), $(nproc) cores shared, load: $(cut -d' ' -f1-3 /proc/loadavg))" >> "$here/front.txt"
 cat "$here/front.txt"
