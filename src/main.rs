@@ -111,6 +111,9 @@ enum Command {
         /// Passes over the selected groups; rates and ratios are the medians over the passes
         #[arg(long, default_value_t = 1)]
         rounds: usize,
+        /// Directory of the PNGs of `--scene budget` (one speed–error front per scene)
+        #[arg(long, default_value = ".")]
+        plots: PathBuf,
         /// Only write the dense packing with 4 K³ spheres as a data file for
         /// liggghts_inputs/dense_packing.in (prints the time step it was built for), then stop
         #[arg(long, num_args = 2, value_names = ["K", "FILE"], allow_negative_numbers = true)]
@@ -554,6 +557,7 @@ fn bench(
     json: Option<PathBuf>,
     scenes: Vec<String>,
     rounds: usize,
+    plots: PathBuf,
     write: Option<Vec<String>>,
 ) -> Result<(), String> {
     if let Some(w) = write {
@@ -567,7 +571,7 @@ fn bench(
         return Ok(());
     }
     let report =
-        mcdem::bench::run(mcdem::bench::Options { quick, scenes, rounds }, &mut |l| eprintln!("{l}"))?;
+        mcdem::bench::run(mcdem::bench::Options { quick, scenes, rounds, plots }, &mut |l| eprintln!("{l}"))?;
     print!("{}", mcdem::bench::table(&report));
     if let Some(p) = json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
@@ -606,8 +610,8 @@ fn main() -> ExitCode {
             rayon::scope(|_| run(deck, var, log, opts))
         }
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
-        Command::Bench { quick, json, scenes, rounds, write_packing } => {
-            bench(quick, json, scenes, rounds, write_packing)
+        Command::Bench { quick, json, scenes, rounds, plots, write_packing } => {
+            bench(quick, json, scenes, rounds, plots, write_packing)
         }
         Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
         Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, solid_volume, out } => {

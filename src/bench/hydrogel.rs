@@ -13,7 +13,8 @@ use crate::physics::model_kind::{ModelKind, ModelLabel};
 
 pub const SCENE: &str = "hydrogel_514";
 
-const EXAMPLE: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
+pub(super) const EXAMPLE: &str =
+    "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact";
 
 /// (law variable, model name) as in `liggghts_inputs/select_law.inc`.
 const LAWS: [(&str, ModelKind); 3] =

@@ -13,6 +13,8 @@
 //! rows ran minutes apart at most) and the report gives the median over the rounds with the range;
 //! a row's rate is its median. The targets of the bench are checked on these medians.
 
+mod budget;
+mod budget_scenes;
 mod hydrogel;
 mod kernel;
 mod nonlocal;
@@ -67,6 +69,9 @@ pub struct Report {
     pub errors: BTreeMap<String, f64>,
     /// The bench's speed targets, checked on the (median) ratios and rows above.
     pub targets: Vec<Target>,
+    /// The accuracy budget's speed–error fronts, one per scene (`--scene budget`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub budget: Vec<budget::Front>,
 }
 
 /// One speed target and whether this run meets it.
@@ -89,16 +94,26 @@ pub struct Options {
     pub scenes: Vec<String>,
     /// Passes over the selected groups (≥ 1). The first runs every row, later ones the rows the
     /// targets read (the stock LIGGGHTS `surface multicontact` row alone takes longer than all
-    /// of those together).
+    /// of those together). The `budget` group runs in the first pass only, its settings
+    /// interleaved this many times within it.
     pub rounds: usize,
+    /// Directory of the budget group's PNGs (one per scene).
+    pub plots: std::path::PathBuf,
 }
 
 /// The scene groups, in the order they run.
-pub const SCENES: [&str; 4] = ["kernel", "packing", "hydrogel", "nonlocal"];
+pub const SCENES: [&str; 5] = ["kernel", "packing", "hydrogel", "nonlocal", "budget"];
+
+/// Groups that run only when named with `--scene` (the budget front runs every scene under seven
+/// settings: minutes even in its quick form, too long for the default quick bench).
+const ON_REQUEST: [&str; 1] = ["budget"];
 
 impl Options {
     fn runs(&self, scene: &str) -> bool {
-        self.scenes.is_empty() || self.scenes.iter().any(|s| s == scene)
+        if self.scenes.is_empty() {
+            return !ON_REQUEST.contains(&scene);
+        }
+        self.scenes.iter().any(|s| s == scene)
     }
 }
 
@@ -133,6 +148,8 @@ pub fn run(opts: Options, say: &mut dyn FnMut(&str)) -> Result<Report, String> {
                 }
                 "packing" => packing::rows(&opts, round, &mut report, say),
                 "hydrogel" => hydrogel::rows(&opts, round, &mut report, say),
+                "budget" if round == 0 => budget::rows(&opts, &mut report, say),
+                "budget" => Ok(()),
                 // "nonlocal", the last of SCENES.
                 _ => nonlocal::rows(&opts, &mut report, say),
             };
@@ -279,6 +296,7 @@ fn targets(r: &Report) -> Vec<Target> {
     for x in r.rows.iter().filter(|x| x.scene == nonlocal::SCENE) {
         push(format!("{}: seconds to phi = 0.85", x.model), x.wall_time_s, "<=", 60.0);
     }
+    budget::targets(&r.budget, &mut t);
     t
 }
 
@@ -400,6 +418,7 @@ pub fn table(r: &Report) -> String {
             s.push_str(&format!("  {k:<60} {v:.2e}\n"));
         }
     }
+    s.push_str(&budget::table(&r.budget));
     if !r.targets.is_empty() {
         s.push_str("\ntargets:\n");
         for x in &r.targets {
@@ -500,8 +519,11 @@ mod tests {
 
     #[test]
     fn zero_rounds_are_refused() {
-        let e =
-            run(Options { quick: true, scenes: vec!["kernel".into()], rounds: 0 }, &mut |_| {}).unwrap_err();
+        let e = run(
+            Options { quick: true, scenes: vec!["kernel".into()], rounds: 0, plots: ".".into() },
+            &mut |_| {},
+        )
+        .unwrap_err();
         assert!(e.contains("--rounds"), "{e}");
     }
 }

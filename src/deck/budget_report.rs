@@ -16,6 +16,16 @@ impl Deck {
             100.0 * st.recomputed as f64 / all,
             st.worst_bound
         );
+        let exact: u64 = st.why.iter().sum();
+        if exact > 0 {
+            let parts: Vec<String> = crate::engine::BUDGET_WHY
+                .iter()
+                .zip(st.why)
+                .filter(|(_, c)| *c > 0)
+                .map(|(name, c)| format!("{name} {:.1} %", 100.0 * c as f64 / exact as f64))
+                .collect();
+            text += &format!(" (exact evaluations by reason: {})", parts.join(", "));
+        }
         if st.checks > 0 {
             text += &format!(
                 ", accuracy check ({} checks, every {} steps): measured error {:.3e}, bound {:.3e} (of the particle's scale)",
@@ -29,6 +39,9 @@ impl Deck {
         s.worst_bound = s.worst_bound.max(st.worst_bound);
         s.worst_measured = s.worst_measured.max(st.worst_measured);
         s.worst_checked_bound = s.worst_checked_bound.max(st.worst_checked_bound);
+        for (t, c) in s.why.iter_mut().zip(st.why) {
+            *t += c;
+        }
         text
     }
 }

@@ -46,7 +46,7 @@ mod world;
 pub use blocks::{PairThreads, THREAD_PROBE_STEPS};
 pub use contacts::PairContact;
 pub use domain::Domain;
-pub use mc_budget::{BudgetStats, DEFAULT_CHECK_EVERY, FLOOR_STRAIN};
+pub use mc_budget::{BudgetStats, DEFAULT_CHECK_EVERY, FLOOR_STRAIN, WHY as BUDGET_WHY};
 pub use mesh::Mesh;
 pub use mesh_motion::{Motion, Mover};
 pub use particles::{Particles, GROUP_ALL};

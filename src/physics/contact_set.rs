@@ -485,7 +485,7 @@ thread_local! {
 
 /// Padding of the per-contact arrays and of each term row: room for the last chunk of a row in the
 /// widest lane type ([`super::lanes::F64x4`]).
-const LANES: usize = 4;
+pub(crate) const LANES: usize = 4;
 
 /// The contacts of one particle by component (structure of arrays), padded with [`LANES`] zero
 /// contacts, and the terms of Eq. 2 between them in one row-major matrix (source by target).

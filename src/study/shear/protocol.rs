@@ -247,6 +247,15 @@ pub(super) fn prepare_sorted(
     prepare_with(spec, compress_steps, sort, 1).map_err(|s| s.message)
 }
 
+/// The run's packing compressed to φ (spatially sorted, as the study's runs) and set shearing at
+/// γ̂ (the Lees–Edwards jump and streaming profile), not yet stepped under shear: the start of the
+/// sheared scene of `mcdem bench`'s accuracy-budget front.
+pub fn sheared_start(spec: &RunSpec, compress_steps: u64) -> Result<World, String> {
+    let (mut w, l) = prepare_sorted(spec, compress_steps, true)?;
+    start_shear(&mut w, spec.gamma_hat / time_unit(spec.nu), l);
+    Ok(w)
+}
+
 /// The step is Δt/`refine` and the compression takes `refine` times `compress_steps` steps, so that
 /// it runs at the same rate in time at every step size.
 fn prepare_with(spec: &RunSpec, compress_steps: u64, sort: bool, refine: u32) -> Result<(World, f64), Stop> {
