@@ -6,10 +6,11 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use super::compaction::{box_walls, wall_pair, CompactionLog};
+use super::compaction::{box_walls, domains_past_walls, solid_volume, wall_pair, CompactionLog};
 use super::constitutive::{inverse, Constitutive, Law, Mat};
 use super::contact::{step_bodies_cut, ContactWorkspace};
 use super::grid::Vector;
+use super::implicit::WallsOn;
 use super::points::Points;
 use super::scene::Scene;
 use super::vtk::Snapshots;
@@ -86,6 +87,8 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
     let mut total_iters = 0;
     let mut cut_steps = 0usize;
     let mut failure = None;
+    // Walls on the points: the largest reach of a point's domain past a wall over the run.
+    let mut past_walls = f64::NEG_INFINITY;
     for k in 0..scene.steps {
         let (rep, substeps) = match step_bodies_cut(
             &mut setup.bodies,
@@ -110,9 +113,19 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
         if let Some(c) = compaction.as_ref() {
             let phi = c.phi(&setup.bodies, &setup.walls);
             if phi > 1.0 {
+                // What is past the walls, against the excess of solid over the box (the rest of
+                // the excess, and the voids, must be bodies overlapping).
+                let (_, past) = domains_past_walls(&setup.bodies, &setup.walls);
+                let vs = solid_volume(&setup.bodies);
+                let on = match setup.options.walls_on {
+                    WallsOn::Nodes => "contacts and walls act on grid nodes",
+                    WallsOn::Points => "walls act on the points' domains, body contacts on grid nodes",
+                };
                 failure = Some(format!(
-                    "step {}: the solid fraction Φ = {phi:.4} exceeds 1: material lies past the walls or bodies overlap; contacts and walls act on grid nodes, so this is the resolution's limit (h = {:.3e} m), not the material's; results up to the previous step are kept",
+                    "step {}: the solid fraction Φ = {phi:.4} exceeds 1: material lies past the walls or bodies overlap ({:.2} % of the solid volume lies past the wall planes, against an excess of {:.2} % over the box); {on}, so this is the resolution's limit (h = {:.3e} m), not the material's; results up to the previous step are kept",
                     k + 1,
+                    100.0 * past / vs,
+                    100.0 * (1.0 - 1.0 / phi),
                     setup.bodies[0].grid.h
                 ));
                 break;
@@ -123,6 +136,9 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
             eprintln!("mpm: step {k} did not converge with Δt; taken as {substeps} sub-steps");
         }
         total_iters += rep.newton_iterations;
+        if setup.options.walls_on == WallsOn::Points {
+            past_walls = past_walls.max(domains_past_walls(&setup.bodies, &setup.walls).0);
+        }
         if let Some(v) = vtk.as_mut().filter(|v| v.due(k + 1, scene.steps)) {
             let t = (k + 1) as f64 * setup.options.dt;
             v.write(k + 1, t, &setup.bodies, &setup.walls, &rep.wall_load)?;
@@ -268,6 +284,12 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
             series: vec![Series { label: "points".into(), points: snap, markers: true, thin: false }],
         },
     )?;
+    if setup.options.walls_on == WallsOn::Points {
+        eprintln!(
+            "mpm: walls on the points: the largest reach of a point's domain past a wall over the run is {past_walls:.3e} m ({:.3e} h)",
+            past_walls / setup.bodies[0].grid.h
+        );
+    }
     if let Some(e) = failure {
         return Err(format!("{e} (history up to the previous step written to {})", out.display()));
     }

@@ -129,7 +129,33 @@ impl<const D: usize> CompactionLog<D> {
 }
 
 /// Σ_p J_p V⁰_p over all bodies: the particles' current solid volume (area in 2-D).
-fn solid_volume<const D: usize>(bodies: &[Body<D>]) -> f64 {
+/// How far each material point's domain reaches past a wall: the domain is the point's reference
+/// sub-cell (side l = (V⁰)^{1/D}) mapped by its F, a parallelogram (parallelepiped) whose extent
+/// along the wall's axis a is (l/2) Σ_j |F_aj| on each side of the point. Returns the largest
+/// penetration over the points and walls [m] (≤ 0 when every domain is on its body's side) and the
+/// volume of solid past the wall planes, each point's current volume times the fraction of that
+/// extent beyond a plane (a slab estimate, exact for an axis-aligned domain).
+pub fn domains_past_walls<const D: usize>(bodies: &[Body<D>], walls: &[Wall]) -> (f64, f64) {
+    let (mut worst, mut volume) = (f64::NEG_INFINITY, 0.0);
+    for b in bodies {
+        let pts = &b.points;
+        for p in 0..pts.len() {
+            let l = pts.vol0[p].powf(1.0 / D as f64);
+            for w in walls {
+                let a = w.axis;
+                let e = 0.5 * l * (0..D).map(|j| pts.f[p][(a, j)].abs()).sum::<f64>();
+                // Signed distance of the point from the plane, positive on the body's side.
+                let d = w.side * (pts.x[p][a] - w.position);
+                worst = worst.max(e - d);
+                volume += pts.vol[p] * ((e - d) / (2.0 * e)).clamp(0.0, 1.0);
+            }
+        }
+    }
+    (worst, volume)
+}
+
+/// Σ_p J_p V⁰_p over every body.
+pub fn solid_volume<const D: usize>(bodies: &[Body<D>]) -> f64 {
     bodies.iter().flat_map(|b| b.points.f.iter().zip(&b.points.vol0)).map(|(f, v)| det(f) * v).sum()
 }
 

@@ -33,7 +33,9 @@ pub use super::contact_law::{signorini_coulomb, ContactOptions};
 use super::contact_share::{contact_terms, is_sliver};
 use super::delassus::Delassus;
 use super::grid::{Grid, Vector};
-use super::implicit::{finish, prepare, solve, Body, DofState, StepOptions, Wall, Workspace};
+use super::implicit::{
+    add_point_wall_loads, finish, prepare, solve, Body, DofState, StepOptions, Wall, Workspace,
+};
 
 /// What one multi-body step reports.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -390,6 +392,9 @@ fn try_step<const D: usize>(
                 }
             }
         }
+    }
+    for ws in &cws.bodies {
+        add_point_wall_loads(ws, &mut report.wall_load);
     }
     // The nodes of one pair are consecutive (built pair by pair above).
     let mut last_pair = None;

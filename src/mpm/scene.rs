@@ -7,7 +7,7 @@ use serde::Deserialize;
 use super::constitutive::{Hooke, Law, NeoHookean, SaintVenantKirchhoff};
 use super::contact::ContactOptions;
 use super::grid::{Grid, Vector};
-use super::implicit::{Body, Locking, Newton, StepOptions, Wall};
+use super::implicit::{Body, Locking, Newton, StepOptions, Wall, WallsOn};
 use super::packing::PackingSpec;
 use super::points::Points;
 
@@ -54,6 +54,11 @@ pub struct Scene {
     /// fails, at most this many times (Δt/16 by default; 0: a failed step stops the run).
     #[serde(default = "four")]
     pub step_cuts: u32,
+    /// Where the walls act: "nodes" (Moreau's condition on grid nodes, Section 2.2) or "points"
+    /// (no material point's domain crosses a wall; `implicit::WallsOn`). Absent: "nodes", the
+    /// recorded scenes' treatment.
+    #[serde(default)]
+    pub walls_on: Option<String>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -291,6 +296,11 @@ impl Scene {
                 }
             }
         }
+        let walls_on = match self.walls_on.as_deref() {
+            None | Some("nodes") => WallsOn::Nodes,
+            Some("points") => WallsOn::Points,
+            Some(other) => return Err(format!("walls_on: unknown value \"{other}\" (nodes, points)")),
+        };
         let mut walls = Vec::new();
         for (w, ws) in self.walls.iter().enumerate() {
             if ws.axis >= D || !(ws.side == 1.0 || ws.side == -1.0) {
@@ -309,6 +319,20 @@ impl Scene {
                         "wall {w}: material point {p} of body {b} at {:?} starts on the wrong side of the wall (overlap at start)",
                         points.x[p].as_slice()
                     ));
+                }
+                // On the points, a point's domain (its sub-cell, half-size l/2) must start on the
+                // body's side too; a round-off of the lattice is allowed.
+                if walls_on == WallsOn::Points {
+                    let half = |p: usize| 0.5 * points.vol0[p].powf(1.0 / D as f64);
+                    if let Some(p) = (0..points.len())
+                        .find(|&p| ws.side * (points.x[p][ws.axis] - ws.position) - half(p) < -1e-9 * g.h)
+                    {
+                        return Err(format!(
+                            "wall {w}: the domain of material point {p} of body {b} at {:?} (half-size {:.3e} m) starts past the wall (walls_on = \"points\"; overlap at start)",
+                            points.x[p].as_slice(),
+                            half(p)
+                        ));
+                    }
                 }
             }
             walls.push(Wall { axis: ws.axis, side: ws.side, position: ws.position, velocity: ws.velocity });
@@ -342,6 +366,12 @@ impl Scene {
             contact.max_iter = c.max_iter.unwrap_or(contact.max_iter);
         }
         contact.validate()?;
+        if walls_on == WallsOn::Points && contact.wall_friction != 0.0 {
+            return Err(format!(
+                "contact.wall_friction = {} is not built with walls_on = \"points\" (frictionless walls only); set it to 0 or use walls_on = \"nodes\"",
+                contact.wall_friction
+            ));
+        }
         if self.step_cuts > 20 {
             return Err(format!(
                 "step_cuts must be at most 20 (a step of Δt/2^20 is round-off for any scene), got {}",
@@ -351,7 +381,7 @@ impl Scene {
         Ok(Setup {
             bodies,
             walls,
-            options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip, locking },
+            options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip, locking, walls_on },
             contact,
             step_cuts: self.step_cuts,
         })

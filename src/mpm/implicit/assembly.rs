@@ -52,6 +52,11 @@ pub(super) fn potential<const D: usize>(
     }
     let (lambda, mu) = law.lame();
     scale += pts.vol0.iter().sum::<f64>() * (lambda.abs() + 2.0 * mu.abs()) * D as f64;
+    if ws.pw.enabled {
+        let (p, s) = super::point_walls::potential(ws, u);
+        pi += p;
+        scale += s;
+    }
     match locking {
         Locking::None => {
             for (p, st) in ws.stencils.iter().enumerate() {
@@ -148,6 +153,9 @@ pub(super) fn evaluate<const D: usize>(
                 ws.res[a * D + i] -= fi[i];
             }
         }
+    }
+    if ws.pw.enabled {
+        super::point_walls::add_residual(ws);
     }
     Ok(())
 }
@@ -284,6 +292,9 @@ pub(in crate::mpm) fn factorize<const D: usize>(
                 }
             }
         }
+    }
+    if ws.pw.enabled {
+        super::point_walls::add_tangent(ws);
     }
     let k = SparseColMat::<usize, f64>::try_new_from_triplets(ndof, ndof, &ws.trip)
         .map_err(|e| format!("step {step}: cannot assemble the stiffness matrix: {e:?}"))?;

@@ -18,6 +18,7 @@
 
 mod assembly;
 mod newton;
+mod point_walls;
 #[cfg(test)]
 mod tests;
 mod transfer;
@@ -25,6 +26,7 @@ mod walls;
 
 pub(super) use assembly::{compliance, factorize};
 pub(super) use newton::solve;
+pub(super) use point_walls::add_loads as add_point_wall_loads;
 pub(super) use transfer::prepare;
 
 use faer::sparse::linalg::solvers::Lu;
@@ -95,6 +97,18 @@ pub enum Locking {
     FBar,
 }
 
+/// Where the rigid walls act on a body.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum WallsOn {
+    /// On grid nodes: Moreau's velocity-Signorini condition per node (Section 2.2, Fig. 2a), an
+    /// exact active set; a body's material can lie up to a cell past a wall.
+    #[default]
+    Nodes,
+    /// On the material points' domains: no domain corner crosses a wall (augmented Lagrangian,
+    /// `point_walls`); frictionless only.
+    Points,
+}
+
 /// How the points' velocities are updated from the grid: FLIP (`flip` = 1, the increment of the
 /// nodal velocity, conserves the particle kinetic energy best) blended with PIC (`flip` = 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -104,6 +118,7 @@ pub struct StepOptions {
     pub newton: Newton,
     pub flip: f64,
     pub locking: Locking,
+    pub walls_on: WallsOn,
 }
 
 /// What one step reports.
@@ -166,6 +181,8 @@ pub struct Workspace<const D: usize> {
     pub(super) energy_ref: Option<f64>,
     /// LU factorization of the last assembled Newton matrix (the contact solver's compliance).
     pub(super) lu: Option<Lu<usize, f64>>,
+    /// The walls' corner constraints on the points (`WallsOn::Points`).
+    pub(super) pw: point_walls::PointWalls,
 }
 
 /// Advances the body by one implicit step of size `opt.dt` (Eqs. 10–16). `step` numbers the step in

@@ -4,7 +4,7 @@
 
 use super::assembly::{assemble_and_solve, evaluate, force_scale, potential};
 use super::walls::{add_wall_loads, bind_resting, clamp, clamp_free, release_pulling};
-use super::{Body, DofState, Locking, StepOptions, StepReport, Wall, Workspace};
+use super::{point_walls, Body, DofState, Locking, StepOptions, StepReport, Wall, Workspace};
 use crate::mpm::constitutive::Mat;
 use crate::mpm::points::Points;
 
@@ -60,7 +60,13 @@ pub(in crate::mpm) fn solve<const D: usize>(
     // walls) to convergence, then the Signorini conditions are checked (a free node past its wall
     // is put on it, a bound node whose wall would have to pull is released) and Newton resumes
     // until the set no longer changes.
-    for iter in 1..=opt.newton.max_iter {
+    // Walls on the points: each multiplier update (`point_walls`) starts Newton again with a
+    // budget of its own (the updates are counted and capped there).
+    ws.pw.updates = 0;
+    let mut limit = opt.newton.max_iter;
+    let mut iter = 0;
+    while iter < limit {
+        iter += 1;
         evaluate(pts, &body.law, opt.locking, ws, dt, step, iter)?;
         // Projected Newton (Bertsekas): a free node resting on its wall (within round-off) that
         // the residual pushes into the wall is bound for the solve; otherwise the projection of
@@ -216,12 +222,17 @@ pub(in crate::mpm) fn solve<const D: usize>(
         let mut changed = clamp_free(ws);
         evaluate(pts, &body.law, opt.locking, ws, dt, step, iter)?;
         changed |= release_pulling(ws, walls, fscale);
+        if !changed && ws.pw.enabled && point_walls::update_multipliers(ws, step)? {
+            changed = true;
+            limit = iter + opt.newton.max_iter;
+        }
         if changed {
             du_max = 0.0;
             first = true;
             continue;
         }
         add_wall_loads(ws, walls, &mut report.wall_load);
+        point_walls::add_loads(ws, &mut report.wall_load);
         if !first {
             ws.du_ref = du_max;
             ws.energy_ref = Some(energy1);
@@ -229,8 +240,8 @@ pub(in crate::mpm) fn solve<const D: usize>(
         return Ok(report);
     }
     Err(format!(
-        "step {step}: Newton did not converge in {} iterations: C1 = {:.3e} (ε1 = {:.1e}), C2 = {:.3e} (ε2 = {:.1e}) (Eq. 16)",
-        opt.newton.max_iter, report.c1, opt.newton.eps1, report.c2, opt.newton.eps2
+        "step {step}: Newton did not converge in {iter} iterations: C1 = {:.3e} (ε1 = {:.1e}), C2 = {:.3e} (ε2 = {:.1e}) (Eq. 16)",
+        report.c1, opt.newton.eps1, report.c2, opt.newton.eps2
     ))
 }
 

@@ -3,7 +3,7 @@
 //! and grid to points at the end (Eqs. 9, 13, FLIP/PIC velocity).
 
 use super::walls::wall_bounds;
-use super::{Body, DofState, Fixed, Locking, StepOptions, Wall, Workspace};
+use super::{point_walls, Body, DofState, Fixed, Locking, StepOptions, Wall, WallsOn, Workspace};
 use crate::mpm::constitutive::{det, Constitutive, Law};
 use crate::mpm::grid::{incremental_gradient, Stencil, Vector};
 use crate::mpm::points::Points;
@@ -101,7 +101,14 @@ pub(in crate::mpm) fn prepare<const D: usize>(
         }
     }
 
-    wall_bounds(grid, walls, dt, step, ws)?;
+    // Walls on the points: no nodal bounds, the corner constraints of `point_walls` instead.
+    let on_points = opt.walls_on == WallsOn::Points && !walls.is_empty();
+    wall_bounds(grid, if on_points { &[] } else { walls }, dt, step, ws)?;
+    if on_points {
+        point_walls::prepare(pts, &body.law, walls, dt, grid.h, ws);
+    } else {
+        ws.pw.enabled = false;
+    }
     ws.state.clear();
     ws.state.resize(ndof, DofState::Free);
     for fx in fixed {
