@@ -127,9 +127,22 @@ enum Command {
         /// Poisson ratios (comma-separated); default 0.25,0.3,0.35,0.4,0.45,0.5
         #[arg(long, value_delimiter = ',')]
         nu: Vec<f64>,
-        /// Output directory (calibration.csv, .json, .md, .png)
+        /// Output directory (calibration.csv, .json, .md, .png; with --heldout heldout.csv, .json, .md)
         #[arg(long, default_value = "validation/report")]
         out: PathBuf,
+        /// Instead of fitting: measure the recorded calibration on curves it was not fitted on
+        /// (decompression, first compression, another packing, bcc and single-sphere dies)
+        #[arg(long)]
+        heldout: bool,
+        /// With --heldout: the calibration to check (a calibration.csv); default the built-in one
+        #[arg(long, value_name = "FILE")]
+        calibration: Option<PathBuf>,
+        /// With --heldout: leave out the other packing (the `uniaxial` case run on it measures it)
+        #[arg(long)]
+        skip_other_packing: bool,
+        /// With --heldout: read the fitted curve's nonlocal reference from a `validate` uniaxial.csv
+        #[arg(long, value_name = "FILE")]
+        fit_reference: Option<PathBuf>,
     },
     /// Parameter studies with the standalone engine
     Study {
@@ -463,6 +476,22 @@ fn nonlocal(scene: PathBuf, out: Option<PathBuf>, contacts: Option<PathBuf>) -> 
     Ok(())
 }
 
+fn heldout(opts: mcdem::validate::heldout::Options) -> Result<(), String> {
+    let out = opts.out.clone();
+    let r = mcdem::validate::heldout::run(&opts)?;
+    for e in r.entries.iter().filter(|e| e.model == "mc_advanced_calibrated") {
+        println!(
+            "nu {:.2}: {:<18} NRMSE {:.2} %{}",
+            e.nu,
+            e.curve,
+            100.0 * e.nrmse,
+            if e.fitted { " (fitted)" } else { "" }
+        );
+    }
+    println!("report: {}", out.join("heldout.md").display());
+    Ok(())
+}
+
 fn calibrate(quick: bool, nus: Vec<f64>, out: PathBuf) -> Result<(), String> {
     let fits = mcdem::validate::calibrate::run(&mcdem::validate::calibrate::Options {
         quick,
@@ -613,7 +642,28 @@ fn main() -> ExitCode {
         Command::Bench { quick, json, scenes, rounds, plots, write_packing } => {
             bench(quick, json, scenes, rounds, plots, write_packing)
         }
-        Command::Calibrate { quick, nu, out } => calibrate(quick, nu, out),
+        Command::Calibrate {
+            quick,
+            nu,
+            out,
+            heldout: true,
+            calibration,
+            skip_other_packing,
+            fit_reference,
+        } => heldout(mcdem::validate::heldout::Options {
+            quick,
+            nus: nu,
+            out,
+            calibration,
+            other_packing: !skip_other_packing,
+            fit_reference,
+        }),
+        Command::Calibrate { calibration, skip_other_packing, fit_reference, .. }
+            if calibration.is_some() || skip_other_packing || fit_reference.is_some() =>
+        {
+            Err("--calibration, --skip-other-packing and --fit-reference go with --heldout".into())
+        }
+        Command::Calibrate { quick, nu, out, .. } => calibrate(quick, nu, out),
         Command::Uniaxial { start, nu, kernel, steps, z_start, z_end, solid_volume, out } => {
             uniaxial(start, nu, kernel, steps, z_start, z_end, solid_volume, out)
         }

@@ -8,28 +8,58 @@
 const CALIBRATION: &str = include_str!("../../validation/reference/calibration_mcdem.csv");
 
 /// The recorded calibration's law for ν, if it has this ν (columns as `mcdem calibrate` writes
-/// them: nu,gamma,mpr,youngs_modulus_pa,…; `#` lines are comments).
+/// them: nu,gamma,mpr,youngs_modulus_pa,nrmse,…; `#` lines are comments).
 pub fn calibrated(nu: f64) -> Option<Law> {
-    calibration_rows()
-        .into_iter()
-        .find(|r| (r.0 - nu).abs() < 1e-9)
-        .map(|r| Law { youngs_modulus: r.3, ..Law::advanced(r.1, r.2) })
+    recorded().into_iter().find(|r| (r.nu - nu).abs() < 1e-9).map(|r| r.law)
 }
 
-/// (ν, γ, MPR, E) of every recorded calibration row.
-fn calibration_rows() -> Vec<(f64, f64, f64, f64)> {
-    CALIBRATION
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("nu,") && !l.trim().is_empty())
-        .map(|l| {
-            let v: Vec<f64> = l
-                .split(',')
-                .take(4)
-                .map(|x| x.trim().parse().expect("recorded calibration: a number"))
-                .collect();
-            (v[0], v[1], v[2], v[3])
-        })
-        .collect()
+/// Every row of the built-in calibration (checked by this module's test, so it cannot fail).
+pub fn recorded() -> Vec<Fitted> {
+    parse_calibration(CALIBRATION, "validation/reference/calibration_mcdem.csv")
+        .expect("the built-in calibration parses (tested)")
+}
+
+/// One row of a calibration file: the Poisson ratio, the fitted law and the NRMSE the fit reached
+/// (its residual on the curve it was fitted on).
+#[derive(Debug, Clone, Copy)]
+pub struct Fitted {
+    pub nu: f64,
+    pub law: Law,
+    pub nrmse: f64,
+}
+
+/// The rows of a calibration file in `mcdem calibrate`'s `calibration.csv` format (header naming
+/// at least nu, gamma, mpr, youngs_modulus_pa and nrmse; `#` lines are comments). `file` names the
+/// text in errors.
+pub fn parse_calibration(text: &str, file: &str) -> Result<Vec<Fitted>, String> {
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty());
+    let (_, header) = lines.next().ok_or(format!("{file}: no header line"))?;
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let col =
+        |n: &str| names.iter().position(|h| *h == n).ok_or(format!("{file}: the header has no column '{n}'"));
+    let c = [col("nu")?, col("gamma")?, col("mpr")?, col("youngs_modulus_pa")?, col("nrmse")?];
+    let mut rows = Vec::new();
+    for (i, l) in lines {
+        let f: Vec<&str> = l.split(',').map(str::trim).collect();
+        let mut v = [0.0; 5];
+        for (k, &ck) in c.iter().enumerate() {
+            let x = f.get(ck).ok_or(format!("{file}:{}: missing column '{}'", i + 1, names[ck]))?;
+            v[k] = x.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or(format!(
+                "{file}:{}: '{}' is not a number: '{x}'",
+                i + 1,
+                names[ck]
+            ))?;
+        }
+        let [nu, gamma, mpr, e, nrmse] = v;
+        if !(0.0..=0.5).contains(&nu) || gamma <= 0.0 || mpr < 0.0 || e <= 0.0 || nrmse < 0.0 {
+            return Err(format!(
+                "{file}:{}: out of range (nu in [0, 0.5], gamma > 0, mpr >= 0, E > 0, nrmse >= 0)",
+                i + 1
+            ));
+        }
+        rows.push(Fitted { nu, law: Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nrmse });
+    }
+    Ok(rows)
 }
 
 /// The hydrogel's Young's modulus [Pa] (paper Table 1).
@@ -75,13 +105,28 @@ mod tests {
     /// row has none (the case then runs the App. B values only).
     #[test]
     fn recorded_calibration_parses() {
-        let rows = super::calibration_rows();
-        assert!(!rows.is_empty());
-        for (nu, gamma, mpr, e) in rows {
-            let law = super::calibrated(nu).expect("a row for its own ν");
-            assert_eq!((law.gamma, law.mpr, law.youngs_modulus), (gamma, mpr, e));
-            assert!((0.0..=0.5).contains(&nu) && gamma > 0.0 && mpr >= 0.0 && e > 0.0);
+        let rows = super::recorded();
+        assert_eq!(rows.len(), 6);
+        for r in rows {
+            let law = super::calibrated(r.nu).expect("a row for its own ν");
+            assert_eq!(
+                (law.gamma, law.mpr, law.youngs_modulus),
+                (r.law.gamma, r.law.mpr, r.law.youngs_modulus)
+            );
+            assert!(r.nrmse > 0.0 && r.nrmse < 0.1, "a fit residual of a few per cent: {}", r.nrmse);
         }
         assert!(super::calibrated(0.123).is_none());
+    }
+
+    /// A damaged calibration file stops with its name, line and field.
+    #[test]
+    fn bad_calibration_names_the_problem() {
+        let h = "nu,gamma,mpr,youngs_modulus_pa,nrmse\n";
+        let e = super::parse_calibration(&format!("{h}0.5,x,0.1,2e4,0.03\n"), "f.csv").unwrap_err();
+        assert!(e.contains("f.csv:2") && e.contains("'gamma'"), "{e}");
+        let e = super::parse_calibration("nu,gamma,mpr,youngs_modulus_pa\n", "f.csv").unwrap_err();
+        assert!(e.contains("'nrmse'"), "{e}");
+        let e = super::parse_calibration(&format!("{h}0.7,1,0.1,2e4,0.03\n"), "f.csv").unwrap_err();
+        assert!(e.contains("out of range"), "{e}");
     }
 }

@@ -99,15 +99,15 @@ fn calibrate_one(
         }
         // The evaluations done of those planned: the pace of this ν's estimate.
         note(&format!("eval {evals}/{planned}"), Some((evals - 1) as f64 / planned as f64));
-        let err =
-            match uniaxial::compress(Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nu, s, &data) {
-                Ok((c, _)) => uniaxial::error(&c, &refc),
-                Err(f) if f.instability.is_some() => f64::INFINITY,
-                Err(f) => {
-                    failure = Some(f.message);
-                    f64::INFINITY
-                }
-            };
+        let err = match objective(Law { youngs_modulus: e, ..Law::advanced(gamma, mpr) }, nu, s, &data, &refc)
+        {
+            Ok(err) => err,
+            Err(f) if f.instability.is_some() => f64::INFINITY,
+            Err(f) => {
+                failure = Some(f.message);
+                f64::INFINITY
+            }
+        };
         say(&format!(
             "ν = {nu}: eval {evals}: γ = {gamma:.4} MPR = {mpr:.4} E = {e:.4e} Pa → NRMSE {:.3} %",
             100.0 * err
@@ -143,6 +143,18 @@ fn calibrate_one(
         evaluations: evals,
         wall_time_s: t.elapsed().as_secs_f64(),
     })
+}
+
+/// The calibration's objective: NRMSE of `law`'s compression from the start state `data` against
+/// the nonlocal curve `reference` (both from [`uniaxial::start_state`] and [`uniaxial::reference`]).
+pub fn objective(
+    law: Law,
+    nu: f64,
+    s: &Setup,
+    data: &Path,
+    reference: &uniaxial::Curve,
+) -> Result<f64, crate::deck::DeckFailure> {
+    uniaxial::compress(law, nu, s, data).map(|(c, _)| uniaxial::error(&c, reference))
 }
 
 /// Least-squares line y = a + b x.

@@ -32,6 +32,12 @@ pub struct Reference {
 const CURVES: &[(&str, f64, &str, &str)] = &[
     (
         "neo_hookean",
+        0.45,
+        "continuum_die_neo_hookean_nu0.45.csv",
+        include_str!("../../validation/reference/continuum_die_neo_hookean_nu0.45.csv"),
+    ),
+    (
+        "neo_hookean",
         0.49,
         "continuum_die_neo_hookean_nu0.49.csv",
         include_str!("../../validation/reference/continuum_die_neo_hookean_nu0.49.csv"),

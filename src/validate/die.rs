@@ -46,15 +46,15 @@ const ENGINE_TOLERANCE: f64 = 1e-6;
 const STOCK_TOLERANCE: f64 = 1e-3;
 
 /// One die scene.
-struct Die {
-    case: &'static str,
+pub(super) struct Die {
+    pub(super) case: &'static str,
     title: &'static str,
-    deck: &'static str,
-    side: f64,
+    pub(super) deck: &'static str,
+    pub(super) side: f64,
     centres: Vec<[f64; 3]>,
 }
 
-fn single() -> Die {
+pub(super) fn single() -> Die {
     Die {
         case: "single_particle",
         title: "single hydrogel sphere in a rigid die (App. B, Fig. B.2a)",
@@ -64,7 +64,7 @@ fn single() -> Die {
     }
 }
 
-fn bcc() -> Die {
+pub(super) fn bcc() -> Die {
     let l = D * (1.0 + 2.0 / 3f64.sqrt());
     let (lo, hi) = (R, l - R);
     let mut centres = Vec::new();
@@ -120,8 +120,24 @@ impl DemModel {
     }
 }
 
+/// Deck variables of a frictionless die run with `m` at the particles' Poisson ratio `nu`
+/// (die_common.inc's `nu` and `E`; the case itself runs the decks' defaults, 0.5 and 23.3 kPa).
+pub(super) fn law_vars(m: crate::harness::calibration::Law, nu: f64) -> Vec<(&'static str, String)> {
+    let steps = (TRAVEL * R / V_PLATE / DT).round() as u64;
+    vec![
+        ("mu", "0".into()),
+        ("law", m.law.into()),
+        ("gamma", m.gamma.to_string()),
+        ("mpr", m.mpr.to_string()),
+        ("steps", steps.to_string()),
+        ("every", "100".into()),
+        ("nu", nu.to_string()),
+        ("E", m.youngs_modulus.to_string()),
+    ]
+}
+
 /// The decks write `v_disp f_plate_m[3] f_side_m[1]`; the side wall is the x = 0 face, pushed in −x.
-fn curve_of(run: &DeckRun, side: f64) -> Result<Curve, String> {
+pub(super) fn curve_of(run: &DeckRun, side: f64) -> Result<Curve, String> {
     let area = side * side;
     run.table
         .iter()
@@ -134,11 +150,17 @@ fn curve_of(run: &DeckRun, side: f64) -> Result<Curve, String> {
 
 /// The nonlocal solution of the same die: kernel `kind` scaled by `scale`.
 fn nonlocal(die: &Die, kind: KernelKind, scale: f64) -> Result<(Curve, f64), String> {
+    nonlocal_nu(die, kind, scale, NU_PARTICLE)
+}
+
+/// [`nonlocal`] with the particles' Poisson ratio `nu` (the walls keep 0.5: at E = 50 MPa they
+/// are rigid against the particles whatever their ν).
+pub(super) fn nonlocal_nu(die: &Die, kind: KernelKind, scale: f64, nu: f64) -> Result<(Curve, f64), String> {
     let l = die.side;
     let spheres: Vec<_> = die.centres.iter().map(|c| json!({"x": c, "radius": R})).collect();
     let scene = json!({
         "spheres": spheres,
-        "particle_material": {"youngs_modulus": 23.3e3, "poisson_ratio": 0.5},
+        "particle_material": {"youngs_modulus": 23.3e3, "poisson_ratio": nu},
         "wall_material": {"youngs_modulus": 50e6, "poisson_ratio": 0.5},
         "kernel": kind.name(),
         "kernel_scale": scale,
@@ -172,7 +194,7 @@ fn nonlocal(die: &Die, kind: KernelKind, scale: f64) -> Result<(Curve, f64), Str
 }
 
 /// NRMSE of `model` against `reference` on the reference's points (x > 0), plate and side.
-fn errors(model: &Curve, reference: &Curve) -> (f64, f64) {
+pub(super) fn errors(model: &Curve, reference: &Curve) -> (f64, f64) {
     let plate: Vec<(f64, f64)> = model.iter().map(|p| (p.0, p.1)).collect();
     let side: Vec<(f64, f64)> = model.iter().map(|p| (p.0, p.2)).collect();
     let (mut mp, mut rp, mut ms, mut rs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());

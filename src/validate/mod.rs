@@ -10,6 +10,8 @@ pub mod calibrate;
 pub mod continuum;
 pub mod die;
 pub mod hard_cases;
+pub mod heldout;
+mod heldout_report;
 pub mod packing;
 pub mod physics;
 pub mod uniaxial;

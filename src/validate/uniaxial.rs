@@ -38,7 +38,7 @@ const Z_EXAMPLE: f64 = 0.1375165625;
 const Z_END: f64 = HYDROGEL_Z_PHI[4].1;
 const DT: f64 = 1e-5;
 /// φ from which the error is measured.
-const PHI_MIN: f64 = 0.66;
+pub(super) const PHI_MIN: f64 = 0.66;
 /// Advanced-MC parameters of the paper's App. B calibration (single particle and bcc, ν = 0.5),
 /// run at every ν for comparison with the per-ν calibration.
 const GAMMA_ADVANCED: f64 = 0.81;
@@ -49,7 +49,7 @@ const GEOMETRY_TOLERANCE: f64 = 1e-3;
 /// Update interval of another extra advanced-MC run [steps].
 const UPDATE_EVERY: u64 = 10;
 /// Standard-MC prefactors tried in increasing order; the highest that runs stable is used.
-const GAMMA_LADDER: [f64; 5] = [0.5, 0.75, 1.0, 1.25, 1.5];
+pub(super) const GAMMA_LADDER: [f64; 5] = [0.5, 0.75, 1.0, 1.25, 1.5];
 
 pub struct Setup {
     pub nus: Vec<f64>,
@@ -149,9 +149,18 @@ pub fn start_state(
     s: &Setup,
     dir: &Path,
 ) -> Result<(std::path::PathBuf, std::path::PathBuf), String> {
+    start_state_from(nu, s, dir, &packing().0)
+}
+
+/// [`start_state`] from the packing in the data file `start` instead of [`packing`]'s.
+pub fn start_state_from(
+    nu: f64,
+    s: &Setup,
+    dir: &Path,
+    start: &Path,
+) -> Result<(std::path::PathBuf, std::path::PathBuf), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let dump = dir.join("state.dump");
-    let (start, _) = packing();
     let mut vars = deck_vars(Law::HERTZ, nu, s, 2);
     vars.push(("data", start.display().to_string()));
     vars.push(("statestroke", "2".into()));
@@ -175,7 +184,20 @@ pub fn start_state(
 
 /// One compression stroke of the DEM from the start state `data` (gravity on, as the deck).
 pub fn compress(m: Law, nu: f64, s: &Setup, data: &Path) -> Result<(Curve, DeckRun), DeckFailure> {
-    let mut vars = deck_vars(m, nu, s, 1);
+    let run = strokes(m, nu, s, data, 1)?;
+    Ok((compression(&run, s), run))
+}
+
+/// One compression and the decompression after it, from the start state `data`: the compression
+/// curve (the first `stroke_steps` steps are those of [`compress`], so it is the same curve to the
+/// bit), and the decompression curve as (φ, σ) with φ increasing (piston going up, read backwards).
+pub fn cycle(m: Law, nu: f64, s: &Setup, data: &Path) -> Result<(Curve, Curve, DeckRun), DeckFailure> {
+    let run = strokes(m, nu, s, data, 2)?;
+    Ok((compression(&run, s), decompression(&run, s), run))
+}
+
+fn strokes(m: Law, nu: f64, s: &Setup, data: &Path, n: u32) -> Result<DeckRun, DeckFailure> {
+    let mut vars = deck_vars(m, nu, s, n);
     vars.push(("data", data.display().to_string()));
     let run = runner::run_rust("hydrogel.in", &vars)?;
     if run.table.iter().any(|r| r.iter().any(|v| !v.is_finite())) {
@@ -184,7 +206,24 @@ pub fn compress(m: Law, nu: f64, s: &Setup, data: &Path) -> Result<(Curve, DeckR
             m.law, m.gamma, m.mpr
         )));
     }
-    Ok((compression(&run, s), run))
+    Ok(run)
+}
+
+/// The second stroke of a two-stroke run (piston from `Z_END` back up to its start) as (φ, σ),
+/// sorted by increasing φ; windows as in [`compression`], none straddling the turn.
+fn decompression(run: &DeckRun, s: &Setup) -> Curve {
+    let n = stroke_steps(s.stroke) as f64;
+    let speed = (Z0 - Z_END) / (n * DT);
+    let mut c: Curve = run
+        .table
+        .iter()
+        .filter_map(|r| {
+            let step = r[0] - 0.5 * (s.every as f64 - 1.0) - n;
+            (step >= 0.0 && step <= n).then(|| (phi_of(Z_END + speed * step * DT), r[3] / (LX * LY)))
+        })
+        .collect();
+    c.reverse();
+    c
 }
 
 /// The part of the uniaxial case done, for the time-left estimate of the progress display: each
@@ -224,12 +263,37 @@ pub fn reference(
     steps: usize,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(Curve, f64), String> {
+    let u = crate::nonlocal::uniaxial::Uniaxial::hydrogel(nu, steps)?;
+    let spheres = crate::nonlocal::scene::read_liggghts_dump(state, u.particle)?;
+    reference_of(&spheres, nu, kind, steps, progress)
+}
+
+/// [`reference`] from the packing in the LIGGGHTS data file `data` (e.g. the packing before its
+/// first compression).
+pub fn reference_from_data(
+    data: &Path,
+    nu: f64,
+    kind: KernelKind,
+    steps: usize,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(Curve, f64), String> {
+    let u = crate::nonlocal::uniaxial::Uniaxial::hydrogel(nu, steps)?;
+    let (spheres, _) = crate::nonlocal::scene::read_liggghts_data(data, u.particle)?;
+    reference_of(&spheres, nu, kind, steps, progress)
+}
+
+fn reference_of(
+    spheres: &[crate::nonlocal::Sphere],
+    nu: f64,
+    kind: KernelKind,
+    steps: usize,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(Curve, f64), String> {
     use crate::nonlocal::uniaxial::{compress_with, Uniaxial};
     let u = Uniaxial::hydrogel(nu, steps)?;
-    let spheres = crate::nonlocal::scene::read_liggghts_dump(state, u.particle)?;
     let t = Instant::now();
     let mut done = 0usize;
-    let points = compress_with(&spheres, &u, Kernel::new(kind, 1.0)?, &mut |_| {
+    let points = compress_with(spheres, &u, Kernel::new(kind, 1.0)?, &mut |_| {
         done += 1;
         progress(done as f64 / (steps + 1) as f64);
     })

@@ -10,6 +10,7 @@ mod bench;
 mod calibrate_resume;
 mod compare_vtk;
 mod contacts;
+mod heldout;
 mod progress;
 mod study_shear;
 mod validate;
