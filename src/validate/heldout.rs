@@ -162,22 +162,10 @@ fn uniaxial_entry(
     refc: &Curve,
 ) -> Entry {
     let (nrmse, reference_mean, model_mean, points) = measured(c, refc);
-    Entry {
-        nu,
-        curve,
-        fitted: curve == "fit",
-        model,
-        params,
-        nrmse,
-        nrmse_plate: None,
-        nrmse_side: None,
-        reference_mean,
-        model_mean,
-        points,
-        note: String::new(),
-    }
+    Entry { nrmse, reference_mean, model_mean, points, ..unstable(nu, curve, model, params, String::new()) }
 }
 
+/// An entry without a measurement (NaN NRMSE, no points): a run that went unstable, with `why`.
 fn unstable(nu: f64, curve: &'static str, model: &'static str, params: String, why: String) -> Entry {
     Entry {
         nu,
