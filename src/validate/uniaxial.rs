@@ -265,7 +265,7 @@ pub fn reference(
 ) -> Result<(Curve, f64), String> {
     let u = crate::nonlocal::uniaxial::Uniaxial::hydrogel(nu, steps)?;
     let spheres = crate::nonlocal::scene::read_liggghts_dump(state, u.particle)?;
-    reference_of(&spheres, nu, kind, steps, progress)
+    reference_of(&spheres, &u, nu, kind, steps, progress)
 }
 
 /// [`reference`] from the packing in the LIGGGHTS data file `data` (e.g. the packing before its
@@ -279,21 +279,23 @@ pub fn reference_from_data(
 ) -> Result<(Curve, f64), String> {
     let u = crate::nonlocal::uniaxial::Uniaxial::hydrogel(nu, steps)?;
     let (spheres, _) = crate::nonlocal::scene::read_liggghts_data(data, u.particle)?;
-    reference_of(&spheres, nu, kind, steps, progress)
+    reference_of(&spheres, &u, nu, kind, steps, progress)
 }
 
+/// The reference from `spheres` under the compression `u` (built once by the caller, which also
+/// needed its particle to read the spheres).
 fn reference_of(
     spheres: &[crate::nonlocal::Sphere],
+    u: &crate::nonlocal::uniaxial::Uniaxial,
     nu: f64,
     kind: KernelKind,
     steps: usize,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(Curve, f64), String> {
-    use crate::nonlocal::uniaxial::{compress_with, Uniaxial};
-    let u = Uniaxial::hydrogel(nu, steps)?;
+    use crate::nonlocal::uniaxial::compress_with;
     let t = Instant::now();
     let mut done = 0usize;
-    let points = compress_with(spheres, &u, Kernel::new(kind, 1.0)?, &mut |_| {
+    let points = compress_with(spheres, u, Kernel::new(kind, 1.0)?, &mut |_| {
         done += 1;
         progress(done as f64 / (steps + 1) as f64);
     })
