@@ -59,6 +59,12 @@ pub fn run(path: &Path, out: &Path, vtk_every: Option<usize>) -> Result<(), Stri
 
 fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) -> Result<(), String> {
     let mut setup = scene.setup::<D>()?;
+    if let Some(c) = &setup.prepared {
+        eprintln!(
+            "mpm: packing compressed to jamming by DEM in {} steps: top wall at {:.6e} m, largest overlap of the padded discs {:.3e} m (below the gap)",
+            c.steps, c.top, c.max_overlap
+        );
+    }
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut vtk = vtk_every.map(|n| Snapshots::new(out, n)).transpose()?;
     if let Some(v) = vtk.as_mut() {
@@ -89,6 +95,8 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
     let mut failure = None;
     // Walls on the points: the largest reach of a point's domain past a wall over the run.
     let mut past_walls = f64::NEG_INFINITY;
+    // The step at which a packing reached the scene's `until_phi`, if it did.
+    let mut reached = None;
     for k in 0..scene.steps {
         let (rep, substeps) = match step_bodies_cut(
             &mut setup.bodies,
@@ -130,6 +138,9 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
                 ));
                 break;
             }
+            if scene.until_phi.is_some_and(|u| phi >= u) {
+                reached = Some((k + 1, phi));
+            }
         }
         if substeps > 1 {
             cut_steps += 1;
@@ -143,7 +154,7 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
             let t = (k + 1) as f64 * setup.options.dt;
             v.write(k + 1, t, &setup.bodies, &setup.walls, &rep.wall_load)?;
         }
-        if (k + 1) % scene.output_every != 0 && k + 1 != scene.steps {
+        if (k + 1) % scene.output_every != 0 && k + 1 != scene.steps && reached.is_none() {
             continue;
         }
         progress.detail("steps", "step", format!("step {} of {}", k + 1, scene.steps));
@@ -203,6 +214,10 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
             fd.push((d, 0.5 * (ft + fb)));
             f19.push((d, f19_k));
             sg.push((-gp, -sm));
+        }
+        if let Some((step, phi)) = reached {
+            eprintln!("mpm: step {step}: the packing reached Φ = {phi:.4} ≥ until_phi; the run ends here");
+            break;
         }
     }
     progress.finish("steps");

@@ -23,6 +23,7 @@ mod fbar;
 pub mod grid;
 pub mod implicit;
 pub mod packing;
+mod packing_dem;
 pub mod points;
 pub mod scene;
 pub mod vtk;

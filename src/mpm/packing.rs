@@ -6,6 +6,9 @@
 //! function. Placement is random sequential addition, largest discs first, with a clearance of
 //! `gap` between surfaces and from the box walls, so no grid node is shared at the start: the
 //! packing starts loose (Φ ≈ 0.4–0.5 in 2-D) and the compaction itself brings it to jamming.
+//! With `"compress"` the loose packing is then compressed by a frictionless DEM to jamming
+//! (`packing_dem`), as the paper prepares its initial configuration, and the scene's top wall
+//! starts where the DEM left it.
 
 use serde::Deserialize;
 
@@ -27,6 +30,32 @@ pub struct PackingSpec {
     pub gap: f64,
     #[serde(default = "seed")]
     pub seed: u64,
+    /// Compress the loose packing to jamming by DEM before the run (absent: start loose).
+    #[serde(default)]
+    pub compress: Option<CompressSpec>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompressSpec {
+    /// Top wall pressure at which the DEM packing counts as jammed, in units of the contact
+    /// stiffness over the largest diameter: the padded discs' overlaps are about this fraction of
+    /// the largest diameter, and must stay below `gap` (default 1e-3).
+    #[serde(default = "pressure")]
+    pub pressure: f64,
+}
+
+fn pressure() -> f64 {
+    1e-3
+}
+
+/// A generated packing: the particles, and where the top wall starts when the DEM compressed it.
+#[derive(Clone, Debug)]
+pub struct Packed {
+    /// Centre [m] and radius [m] of each particle.
+    pub discs: Vec<(Vec<f64>, f64)>,
+    /// The DEM preparation, if any (its top wall position, overlaps and steps).
+    pub compressed: Option<super::packing_dem::Compressed>,
 }
 
 fn seed() -> u64 {
@@ -37,7 +66,24 @@ fn seed() -> u64 {
 const TRIES: usize = 200_000;
 
 impl PackingSpec {
-    /// The particles' centres and radii, or an error naming what cannot be met.
+    /// The particles, placed loose and, with `compress`, compressed to jamming by DEM; or an error
+    /// naming what cannot be met.
+    pub fn packed<const D: usize>(&self) -> Result<Packed, String> {
+        let mut discs = self.discs(D)?;
+        let compressed = match &self.compress {
+            None => None,
+            Some(c) => {
+                let out = super::packing_dem::compress::<D>(&discs, &self.lo, &self.hi, self.gap, c.pressure)?;
+                for (d, x) in discs.iter_mut().zip(&out.centres) {
+                    d.0.clone_from(x);
+                }
+                Some(out)
+            }
+        };
+        Ok(Packed { discs, compressed })
+    }
+
+    /// The particles' centres and radii placed loose, or an error naming what cannot be met.
     pub fn discs(&self, dim: usize) -> Result<Vec<(Vec<f64>, f64)>, String> {
         let [d0, d1] = self.diameter;
         if !(d0.is_finite() && d0 > 0.0 && d1 >= d0) {
@@ -138,6 +184,7 @@ mod tests {
             hi: vec![1.0, 1.0],
             gap: 0.0,
             seed: 7,
+            compress: None,
         };
         assert_eq!(p.discs(2).unwrap().len(), 1);
     }

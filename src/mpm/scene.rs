@@ -59,6 +59,10 @@ pub struct Scene {
     /// recorded scenes' treatment.
     #[serde(default)]
     pub walls_on: Option<String>,
+    /// A packing in a box ends its run once its solid fraction Φ reaches this (Section 6.2
+    /// compacts to Φ ≈ 0.97); absent: the run takes all its steps.
+    #[serde(default)]
+    pub until_phi: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -166,6 +170,8 @@ pub struct Setup<const D: usize> {
     pub contact: ContactOptions,
     /// See `Scene::step_cuts`.
     pub step_cuts: u32,
+    /// The DEM preparation of a `"packing"` with `"compress"` (where it left the top wall).
+    pub prepared: Option<super::packing_dem::Compressed>,
 }
 
 impl Scene {
@@ -209,14 +215,18 @@ impl Scene {
         if !(0.0..=1.0).contains(&self.flip) {
             return Err(format!("flip must lie in [0, 1], got {}", self.flip));
         }
-        let generated = match &self.packing {
-            Some(p) if self.body.is_none() && self.bodies.is_none() => p
-                .discs(D)?
-                .into_iter()
-                .map(|(center, radius)| BodySpec::Disc { center, radius, velocity: Vec::new() })
-                .collect(),
+        let (generated, prepared) = match &self.packing {
+            Some(p) if self.body.is_none() && self.bodies.is_none() => {
+                let packed = p.packed::<D>()?;
+                let discs = packed
+                    .discs
+                    .into_iter()
+                    .map(|(center, radius)| BodySpec::Disc { center, radius, velocity: Vec::new() })
+                    .collect();
+                (discs, packed.compressed)
+            }
             Some(_) => return Err("scene: give one of \"body\", \"bodies\" or \"packing\", not both".into()),
-            None => Vec::new(),
+            None => (Vec::new(), None),
         };
         let specs: Vec<&BodySpec> = match (&self.body, &self.bodies) {
             _ if !generated.is_empty() => generated.iter().collect(),
@@ -301,8 +311,25 @@ impl Scene {
             Some("points") => WallsOn::Points,
             Some(other) => return Err(format!("walls_on: unknown value \"{other}\" (nodes, points)")),
         };
+        // A DEM-compressed packing moves the top wall (the high side of the last axis, at the
+        // packing box's top) to where the DEM left it.
+        let mut wall_specs = self.walls.clone();
+        if let (Some(c), Some(p)) = (&prepared, &self.packing) {
+            let top = p.hi[D - 1];
+            let w = wall_specs
+                .iter_mut()
+                .find(|w| w.axis == D - 1 && w.side == -1.0 && (w.position - top).abs() <= 1e-12 * top.abs().max(1e-3))
+                .ok_or_else(|| {
+                    format!(
+                        "packing: compress needs a wall on axis {} with side -1 at the packing's top hi[{}] = {top} (the wall the DEM moves)",
+                        D - 1,
+                        D - 1
+                    )
+                })?;
+            w.position = c.top;
+        }
         let mut walls = Vec::new();
-        for (w, ws) in self.walls.iter().enumerate() {
+        for (w, ws) in wall_specs.iter().enumerate() {
             if ws.axis >= D || !(ws.side == 1.0 || ws.side == -1.0) {
                 return Err(format!(
                     "wall {w}: axis must be below {D} and side ±1 (got axis {}, side {})",
@@ -372,6 +399,14 @@ impl Scene {
                 contact.wall_friction
             ));
         }
+        if let Some(u) = self.until_phi {
+            if !(u > 0.0 && u <= 1.0) {
+                return Err(format!("until_phi must lie in (0, 1], got {u}"));
+            }
+            if bodies.len() < 2 || (0..D).any(|d| !walls.iter().any(|w| w.axis == d)) {
+                return Err("until_phi needs several bodies in a box of walls on every axis (a packing's Φ)".into());
+            }
+        }
         if self.step_cuts > 20 {
             return Err(format!(
                 "step_cuts must be at most 20 (a step of Δt/2^20 is round-off for any scene), got {}",
@@ -384,6 +419,7 @@ impl Scene {
             options: StepOptions { dt: self.dt, gravity, newton, flip: self.flip, locking, walls_on },
             contact,
             step_cuts: self.step_cuts,
+            prepared,
         })
     }
 }
