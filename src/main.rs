@@ -161,6 +161,19 @@ enum Command {
         #[arg(long, value_name = "N")]
         vtk_every: Option<usize>,
     },
+    /// Fits the compaction laws of Nezamabadi et al. (2019), Eqs. 21–23, to `mcdem mpm` packing runs
+    /// (one output directory per λ) and draws Figs. 11–15 (see docs/mpm.md)
+    MpmFit {
+        /// Output directories of `mcdem mpm` runs (packing.csv, scene.json)
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Where fit.md and the charts go
+        #[arg(long, default_value = "mpm_fit")]
+        out: PathBuf,
+        /// Jamming point Φ₀ (default: from the data, where the runs' ε(Φ) part; needs two runs)
+        #[arg(long)]
+        phi0: Option<f64>,
+    },
     /// Finite-element continuum reference: one sphere between rigid frictionless walls (JSON scene, see src/fem/scene.rs)
     Continuum {
         /// Scene file (JSON)
@@ -669,6 +682,7 @@ fn main() -> ExitCode {
         }
         Command::Study { study: s } => study(s),
         Command::Mpm { scene, out, vtk_every } => mcdem::mpm::cli::run(&scene, &out, vtk_every),
+        Command::MpmFit { runs, out, phi0 } => mcdem::mpm::cli::fit(&runs, &out, phi0),
         Command::Continuum { scene, out } => mcdem::fem::scene::run(&scene, &out),
         // Its own exit statuses (0 agree, 1 differ, 2 unreadable input): see docs/compare.md.
         Command::Compare(args) => return mcdem::compare::cli(&args),

@@ -43,6 +43,21 @@ pub fn mean_strain_stress<const D: usize>(points: &Points<D>, law: &Law) -> (f64
     (g / v, s / v)
 }
 
+/// `mcdem mpm-fit`: the compaction laws fitted to the runs in `dirs`, report printed and written
+/// with the charts into `out`.
+pub fn fit(dirs: &[std::path::PathBuf], out: &Path, phi0: Option<f64>) -> Result<(), String> {
+    if let Some(p) = phi0 {
+        if !(p > 0.0 && p < 1.0) {
+            return Err(format!("--phi0 must lie in (0, 1), got {p}"));
+        }
+    }
+    let runs = dirs.iter().map(|d| super::compaction_fit::read_run(d)).collect::<Result<Vec<_>, _>>()?;
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let md = super::compaction_fit::report(&runs, phi0, out)?;
+    println!("{md}");
+    Ok(())
+}
+
 /// Runs the scene at `path`, writing into `out`; `vtk_every`: VTK snapshots every this many steps.
 pub fn run(path: &Path, out: &Path, vtk_every: Option<usize>) -> Result<(), String> {
     if vtk_every == Some(0) {
@@ -50,6 +65,9 @@ pub fn run(path: &Path, out: &Path, vtk_every: Option<usize>) -> Result<(), Stri
     }
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let scene = Scene::from_json(&text)?;
+    // The scene beside its outputs: what was run, and the material `mpm-fit` reads.
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    std::fs::write(out.join("scene.json"), &text).map_err(|e| format!("cannot write scene.json: {e}"))?;
     match scene.dimension {
         2 => run_d::<2>(&scene, out, vtk_every),
         3 => run_d::<3>(&scene, out, vtk_every),
@@ -160,6 +178,9 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
         progress.detail("steps", "step", format!("step {} of {}", k + 1, scene.steps));
         if let Some(c) = compaction.as_mut() {
             c.record(k + 1, (k + 1) as f64 * setup.options.dt, &setup.bodies, &setup.walls, &rep);
+            // Written as it grows: a long compaction can be followed, and what it reached kept.
+            std::fs::write(out.join("packing.csv"), &c.csv)
+                .map_err(|e| format!("cannot write packing.csv: {e}"))?;
         }
         let (gm, sm) = mean_strain_stress(&setup.bodies[0].points, &setup.bodies[0].law);
         let (mut d, mut ft, mut fb, mut gp) = (f64::NAN, f64::NAN, f64::NAN, f64::NAN);

@@ -14,6 +14,7 @@
 
 pub mod cli;
 pub mod compaction;
+pub mod compaction_fit;
 pub mod constitutive;
 pub mod contact;
 mod contact_law;

@@ -73,7 +73,8 @@ impl PackingSpec {
         let compressed = match &self.compress {
             None => None,
             Some(c) => {
-                let out = super::packing_dem::compress::<D>(&discs, &self.lo, &self.hi, self.gap, c.pressure)?;
+                let out =
+                    super::packing_dem::compress::<D>(&discs, &self.lo, &self.hi, self.gap, c.pressure)?;
                 for (d, x) in discs.iter_mut().zip(&out.centres) {
                     d.0.clone_from(x);
                 }

@@ -71,7 +71,10 @@ pub fn compress<const D: usize>(
         ));
     }
     if !(pad.is_finite() && pad > 0.0) {
-        return Err("packing: compress needs a positive gap (the clearance the DEM's overlaps must stay below)".into());
+        return Err(
+            "packing: compress needs a positive gap (the clearance the DEM's overlaps must stay below)"
+                .into(),
+        );
     }
     let n = discs.len();
     let l = discs.iter().map(|d| 2.0 * d.1 + pad).fold(0.0, f64::max);
@@ -227,7 +230,9 @@ impl<const D: usize> Cells<D> {
     }
 
     fn cell_of(&self, p: &[f64; D]) -> [usize; D] {
-        std::array::from_fn(|d| (((p[d] - self.lo[d]) / self.side).floor().max(0.0) as usize).min(self.dims[d] - 1))
+        std::array::from_fn(|d| {
+            (((p[d] - self.lo[d]) / self.side).floor().max(0.0) as usize).min(self.dims[d] - 1)
+        })
     }
 
     fn index(&self, c: &[usize; D]) -> usize {

@@ -404,7 +404,9 @@ impl Scene {
                 return Err(format!("until_phi must lie in (0, 1], got {u}"));
             }
             if bodies.len() < 2 || (0..D).any(|d| !walls.iter().any(|w| w.axis == d)) {
-                return Err("until_phi needs several bodies in a box of walls on every axis (a packing's Φ)".into());
+                return Err(
+                    "until_phi needs several bodies in a box of walls on every axis (a packing's Φ)".into()
+                );
             }
         }
         if self.step_cuts > 20 {

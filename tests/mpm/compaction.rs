@@ -155,14 +155,20 @@ fn a_packing_stops_where_the_solid_fraction_passes_one() {
 /// `until_phi` ends the run normally at that Φ (through the command, with its message).
 #[test]
 fn a_dem_compressed_packing_starts_jammed_and_runs_until_its_phi() {
-    let scene = SCENE.replace(r#""seed": 5}"#, r#""seed": 5, "compress": {"pressure": 1e-3}}"#).replace(
-        r#""count": 6"#,
-        r#""count": 12"#,
-    ).replace(r#""gap": 5e-4"#, r#""gap": 1.5e-4"#).replace(r#""hi": [0.010, 0.012]"#, r#""hi": [0.010, 0.030]"#)
+    let scene = SCENE
+        .replace(r#""seed": 5}"#, r#""seed": 5, "compress": {"pressure": 1e-3}}"#)
+        .replace(r#""count": 6"#, r#""count": 12"#)
+        .replace(r#""gap": 5e-4"#, r#""gap": 1.5e-4"#)
+        .replace(r#""hi": [0.010, 0.012]"#, r#""hi": [0.010, 0.030]"#)
         .replace(r#""position": 0.012, "velocity""#, r#""position": 0.030, "velocity""#);
     let s = Scene::from_json(&scene).unwrap().setup::<2>().unwrap();
     let prep = s.prepared.as_ref().expect("the packing was compressed");
-    assert!(prep.top < 0.03 && s.walls[3].position == prep.top, "top wall {} vs DEM {}", s.walls[3].position, prep.top);
+    assert!(
+        prep.top < 0.03 && s.walls[3].position == prep.top,
+        "top wall {} vs DEM {}",
+        s.walls[3].position,
+        prep.top
+    );
     assert!(prep.max_overlap < 0.5 * 1.5e-4);
     let log = CompactionLog::new(box_walls::<2>(&s.walls).unwrap(), &s.walls, &s.bodies);
     let phi0 = log.phi(&s.bodies, &s.walls);
@@ -171,8 +177,9 @@ fn a_dem_compressed_packing_starts_jammed_and_runs_until_its_phi() {
     // whose walls order the first layer and leave gaps beside it.
     let spec = Scene::from_json(&scene).unwrap().packing.unwrap();
     let packed = spec.packed::<2>().unwrap();
-    let padded: f64 = packed.discs.iter().map(|d| std::f64::consts::PI * (d.1 + 0.75e-4).powi(2)).sum::<f64>()
-        / ((0.010 - 1.5e-4) * (prep.top - 1.5e-4));
+    let padded: f64 =
+        packed.discs.iter().map(|d| std::f64::consts::PI * (d.1 + 0.75e-4).powi(2)).sum::<f64>()
+            / ((0.010 - 1.5e-4) * (prep.top - 1.5e-4));
     eprintln!("padded Φ {padded}, Φ₀ {phi0}");
     assert_eq!(prep.centres.len(), s.bodies.len());
     assert!((0.65..0.86).contains(&padded), "padded Φ of the prepared packing: {padded}");
@@ -182,7 +189,14 @@ fn a_dem_compressed_packing_starts_jammed_and_runs_until_its_phi() {
     let quick = scene.replace(r#""steps": 500}"#, r#""steps": 400, "until_phi": 0.7, "output_every": 50}"#);
     let quick = quick.replace("0.7,", &format!("{:.4},", phi0 + 0.005));
     std::fs::write(&path, quick).unwrap();
-    let out = assert_cmd::Command::cargo_bin("mcdem").unwrap().arg("mpm").arg(&path).arg("--out").arg(dir.path()).output().unwrap();
+    let out = assert_cmd::Command::cargo_bin("mcdem")
+        .unwrap()
+        .arg("mpm")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("compressed to jamming by DEM") && err.contains("≥ until_phi"), "{err}");
@@ -195,7 +209,8 @@ fn a_dem_compressed_packing_starts_jammed_and_runs_until_its_phi() {
 #[test]
 fn bad_preparations_name_their_problem() {
     let err = |text: String| Scene::from_json(&text).and_then(|s| s.setup::<2>().map(|_| ())).unwrap_err();
-    let with = |compress: &str| SCENE.replace(r#""seed": 5}"#, &format!(r#""seed": 5, "compress": {compress}}}"#));
+    let with =
+        |compress: &str| SCENE.replace(r#""seed": 5}"#, &format!(r#""seed": 5, "compress": {compress}}}"#));
     let e = err(with(r#"{"pressure": 0.2}"#));
     assert!(e.contains("compress.pressure"), "{e}");
     let e = err(with("{}").replace(r#""gap": 5e-4"#, r#""gap": 0"#));
