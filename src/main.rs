@@ -30,34 +30,8 @@ enum Command {
         /// Log file (default log.liggghts; `none` for no log)
         #[arg(long = "log")]
         log: Option<PathBuf>,
-        /// No progress bar even on a terminal
-        #[arg(long)]
-        no_progress: bool,
-        /// Multi-contact geometry tolerance, as a fraction of the particle radius: keep each
-        /// particle's Eq. 2 geometry until a contact point moved this far (0 = exact, the default;
-        /// an approximation that trades accuracy for speed, see docs/dem.md)
-        #[arg(long, default_value_t = 0.0)]
-        mc_geometry_tolerance: f64,
-        /// Multi-contact update interval in steps: recompute the radius changes every K steps and
-        /// at neighbour-list builds, keep them in between (default: the deck's `updateEvery`, else
-        /// 1 = every step, exact; an approximation that trades accuracy for speed, see docs/dem.md)
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=mcdem::deck::MAX_UPDATE_EVERY))]
-        mc_update_every: Option<u64>,
-        /// Multi-contact accuracy budget EPS (overrides the deck's `mcAccuracy`): each particle
-        /// reuses its last exact Eq. 2 radius changes while a bound on their error stays below
-        /// EPS times their size (0 = exact; see docs/dem.md "Accuracy budget")
-        #[arg(long)]
-        mc_accuracy: Option<f64>,
-        /// Every K steps, compute the exact radius changes as a shadow (not used for the forces)
-        /// and report the measured error next to the bound (overrides `mcAccuracyCheck`)
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
-        mc_accuracy_check: Option<u64>,
-        /// Whether a step's force passes use both threads of the pool: `auto` (default) times
-        /// windows of steps each way every 5000 steps (sooner after it chose one core) and keeps
-        /// the faster; `serial` and `parallel` fix the choice. Results are bit-identical in all
-        /// three; only speed differs.
-        #[arg(long, value_enum, default_value_t = ThreadsMode::Auto)]
-        threads_mode: ThreadsMode,
+        #[command(flatten)]
+        flags: RunFlags,
     },
     /// Nonlocal quasi-static reference (Gonzalez & Cuitiño 2012): solve a JSON scene along its loading path
     Nonlocal {
@@ -412,12 +386,35 @@ enum ThreadsMode {
 }
 
 /// `mcdem run`'s flags beyond the deck, its variables and the log.
+#[derive(Debug, clap::Args)]
 struct RunFlags {
+    /// No progress bar even on a terminal
+    #[arg(long)]
     no_progress: bool,
+    /// Multi-contact geometry tolerance, as a fraction of the particle radius: keep each
+    /// particle's Eq. 2 geometry until a contact point moved this far (0 = exact, the default;
+    /// an approximation that trades accuracy for speed, see docs/dem.md)
+    #[arg(long, default_value_t = 0.0)]
     mc_geometry_tolerance: f64,
+    /// Multi-contact update interval in steps: recompute the radius changes every K steps and
+    /// at neighbour-list builds, keep them in between (default: the deck's `updateEvery`, else
+    /// 1 = every step, exact; an approximation that trades accuracy for speed, see docs/dem.md)
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=mcdem::deck::MAX_UPDATE_EVERY))]
     mc_update_every: Option<u64>,
+    /// Multi-contact accuracy budget EPS (overrides the deck's `mcAccuracy`): each particle
+    /// reuses its last exact Eq. 2 radius changes while a bound on their error stays below
+    /// EPS times their size (0 = exact; see docs/dem.md "Accuracy budget")
+    #[arg(long)]
     mc_accuracy: Option<f64>,
+    /// Every K steps, compute the exact radius changes as a shadow (not used for the forces)
+    /// and report the measured error next to the bound (overrides `mcAccuracyCheck`)
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     mc_accuracy_check: Option<u64>,
+    /// Whether a step's force passes use both threads of the pool: `auto` (default) times
+    /// windows of steps each way every 5000 steps (sooner after it chose one core) and keeps
+    /// the faster; `serial` and `parallel` fix the choice. Results are bit-identical in all
+    /// three; only speed differs.
+    #[arg(long, value_enum, default_value_t = ThreadsMode::Auto)]
     threads_mode: ThreadsMode,
 }
 
@@ -630,27 +627,7 @@ fn main() -> ExitCode {
         Command::Packing { kind: _, seed, out, describe } => packing(seed, out, describe),
         // The time loop runs on a worker of the thread pool, whose size (RAYON_NUM_THREADS, else
         // the cores) sets the members of the engine's team of threads.
-        Command::Run {
-            deck,
-            var,
-            log,
-            no_progress,
-            mc_geometry_tolerance,
-            mc_update_every,
-            mc_accuracy,
-            mc_accuracy_check,
-            threads_mode,
-        } => {
-            let opts = RunFlags {
-                no_progress,
-                mc_geometry_tolerance,
-                mc_update_every,
-                mc_accuracy,
-                mc_accuracy_check,
-                threads_mode,
-            };
-            rayon::scope(|_| run(deck, var, log, opts))
-        }
+        Command::Run { deck, var, log, flags } => rayon::scope(|_| run(deck, var, log, flags)),
         Command::Nonlocal { scene, out, contacts } => nonlocal(scene, out, contacts),
         Command::Bench { quick, json, scenes, rounds, plots, write_packing } => {
             bench(quick, json, scenes, rounds, plots, write_packing)
