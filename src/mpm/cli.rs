@@ -331,7 +331,7 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
     }
     eprintln!(
         "mpm: {} steps ({cut_steps} of them cut into sub-steps), {} points, {} Newton iterations, {wall:.2} s wall time; outputs in {}",
-        scene.steps,
+        reached.map_or(scene.steps, |(step, _)| step),
         n_points,
         total_iters,
         out.display()
