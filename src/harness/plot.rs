@@ -62,8 +62,11 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     }
 }
 
-/// Tick text: plain decimals in the everyday range, scientific notation outside it.
-fn tick(v: f64) -> String {
+/// Tick text: plain decimals in the everyday range, scientific notation outside it. A tick within
+/// round-off of zero on an axis spanning `span` (the sum of steps that should give 0, e.g. −5.55e-17)
+/// reads 0 (`span` 0 on a log axis, whose ticks are never round-off).
+fn tick(v: f64, span: f64) -> String {
+    let v = if v.abs() <= 1e-9 * span.abs() { 0.0 } else { v };
     let a = v.abs();
     if a == 0.0 || (1e-2..1e4).contains(&a) {
         format!("{v:.3}").trim_end_matches('0').trim_end_matches('.').to_string()
@@ -126,8 +129,8 @@ fn draw_on<DB: DrawingBackend>(
                 ctx.configure_mesh()
                     .x_desc(chart.x_label)
                     .y_desc(chart.y_label)
-                    .x_label_formatter(&|v| tick(*v))
-                    .y_label_formatter(&|v| tick(*v))
+                    .x_label_formatter(&|v| tick(*v, if chart.log_x { 0.0 } else { xs.1 - xs.0 }))
+                    .y_label_formatter(&|v| tick(*v, if chart.log_y { 0.0 } else { ys.1 - ys.0 }))
                     .draw()
                     .map_err(err)?;
                 for (i, s) in chart.series.iter().enumerate() {
@@ -188,4 +191,19 @@ fn draw_on<DB: DrawingBackend>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick;
+
+    /// A tick at round-off of zero on a linear axis reads 0; real small values, and every tick of a
+    /// log axis (span 0), keep their digits.
+    #[test]
+    fn tick_text_drops_round_off_at_zero_only() {
+        assert_eq!(tick(-5.55e-17, 1.3), "0");
+        assert_eq!(tick(0.25, 1.3), "0.25");
+        assert_eq!(tick(1e-12, 0.0), "1.00e-12");
+        assert_eq!(tick(2e-6, 1e-5), "2.00e-6");
+    }
 }
