@@ -83,7 +83,6 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
             c.steps, c.top, c.max_overlap
         );
     }
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut vtk = vtk_every.map(|n| Snapshots::new(out, n)).transpose()?;
     if let Some(v) = vtk.as_mut() {
         v.write(0, 0.0, &setup.bodies, &setup.walls, &[])?;
@@ -104,6 +103,11 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
         Some(w) if setup.bodies.len() > 1 => Some(CompactionLog::new(w, &setup.walls, &setup.bodies)),
         _ => None,
     };
+    // packing.csv is written as it grows (header now, each row as it is recorded).
+    if let Some(c) = &compaction {
+        std::fs::write(out.join("packing.csv"), &c.csv)
+            .map_err(|e| format!("cannot write packing.csv: {e}"))?;
+    }
     let started = Instant::now();
     // Steps done and the time left, on a terminal as a bar, elsewhere a line every 10 s.
     let progress = crate::harness::progress::Progress::new("mpm", 1);
@@ -246,10 +250,6 @@ fn run_d<const D: usize>(scene: &Scene, out: &Path, vtk_every: Option<usize>) ->
     let wall = started.elapsed().as_secs_f64();
     std::fs::write(out.join("history.csv"), csv).map_err(|e| format!("cannot write history.csv: {e}"))?;
     std::fs::write(out.join("bodies.csv"), bcsv).map_err(|e| format!("cannot write bodies.csv: {e}"))?;
-    if let Some(c) = &compaction {
-        std::fs::write(out.join("packing.csv"), &c.csv)
-            .map_err(|e| format!("cannot write packing.csv: {e}"))?;
-    }
     let mut pts = String::from("body,x,y,z,J,sigma_xx,sigma_yy,sigma_xy,volume\n");
     let mut snap = Vec::new();
     let mut n_points = 0;

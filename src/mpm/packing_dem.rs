@@ -91,13 +91,14 @@ pub fn compress<const D: usize>(
     let mut f = vec![[0.0; D]; n];
     let top_area: f64 = (0..D - 1).map(|d| hi_s[d] - lo_s[d]).product();
     let top = D - 1;
-    let mut cells = Cells::<D>::new(lo_s, 2.0 * r.iter().cloned().fold(0.0, f64::max));
+    let r_max = r.iter().cloned().fold(0.0, f64::max);
+    let mut cells = Cells::<D>::new(lo_s, 2.0 * r_max);
 
     let rest = REST_SPEED * omega;
-    // Volume of the padded discs (2-D area, 3-D volume): the unit ball's measure times r^D.
+    // Volume of the padded discs (2-D area, 3-D volume): the unit ball's measure times r^D, the
+    // discs' masses at density 1.
     let unit_ball = if D == 2 { std::f64::consts::PI } else { 4.0 / 3.0 * std::f64::consts::PI };
-    let solid: f64 = r.iter().map(|ri| unit_ball * ri.powi(D as i32)).sum();
-    let r_max = r.iter().cloned().fold(0.0, f64::max);
+    let solid: f64 = unit_ball * m.iter().sum::<f64>();
     let mut p_top = 0.0;
     let mut steps = 0;
     let mut max_overlap;

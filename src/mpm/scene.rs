@@ -403,9 +403,10 @@ impl Scene {
             if !(u > 0.0 && u <= 1.0) {
                 return Err(format!("until_phi must lie in (0, 1], got {u}"));
             }
-            if bodies.len() < 2 || (0..D).any(|d| !walls.iter().any(|w| w.axis == d)) {
+            // The same condition under which `mcdem mpm` measures Φ (`compaction::box_walls`).
+            if bodies.len() < 2 || super::compaction::box_walls::<D>(&walls).is_none() {
                 return Err(
-                    "until_phi needs several bodies in a box of walls on every axis (a packing's Φ)".into()
+                    "until_phi needs several bodies in a box: a wall on each side of every axis (a packing's Φ)".into()
                 );
             }
         }
