@@ -100,13 +100,11 @@ pub fn read_run(dir: &Path) -> Result<Run, String> {
     Ok(Run { label, lambda, mu, rows })
 }
 
-/// Linear interpolation of `f(row)` at packing fraction `phi` (rows in the order of the run, Φ
-/// rising); `None` outside the run's range.
+/// `f(row)` at packing fraction `phi` (rows in the order of the run, Φ rising), interpolated
+/// linearly; `None` outside the run's range.
 fn at(rows: &[Row], phi: f64, f: impl Fn(&Row) -> f64) -> Option<f64> {
-    rows.windows(2).find(|w| w[0].phi <= phi && phi <= w[1].phi).map(|w| {
-        let t = if w[1].phi > w[0].phi { (phi - w[0].phi) / (w[1].phi - w[0].phi) } else { 0.0 };
-        f(&w[0]) + t * (f(&w[1]) - f(&w[0]))
-    })
+    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.phi, f(r))).collect();
+    crate::harness::runner::interpolate(&points, phi)
 }
 
 /// The jamming point of the paper's Fig. 11: the largest Φ (on a 1e-3 grid) up to which the ε(Φ)
@@ -211,18 +209,8 @@ fn best_c1(run: &Run, phi0: f64, c2: f64) -> (f64, f64) {
     let k =
         (0..=n).map(|i| a0 + (b0 - a0) * i as f64 / n as f64).min_by(|x, y| f(*x).total_cmp(&f(*y))).unwrap();
     let step = (b0 - a0) / n as f64;
-    let (mut a, mut b) = (k - step, k + step);
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..60 {
-        let (x1, x2) = (b - g * (b - a), a + g * (b - a));
-        if f(x1) < f(x2) {
-            b = x2;
-        } else {
-            a = x1;
-        }
-    }
-    let t = 0.5 * (a + b);
-    (t.exp(), f(t))
+    let (t, e) = crate::validate::calibrate::golden(k - step, k + step, 60, &mut |t| f(t));
+    (t.exp(), e)
 }
 
 /// c₂ scanned on [0, 1] in steps of 1e-3 (the paper's 0.27 inside), then refined to 1e-5.

@@ -43,7 +43,7 @@ pub struct Fit {
 }
 
 /// Golden-section search for the minimum of `f` on [a, b] with `iters` interval reductions.
-fn golden(mut a: f64, mut b: f64, iters: usize, f: &mut dyn FnMut(f64) -> f64) -> (f64, f64) {
+pub(crate) fn golden(mut a: f64, mut b: f64, iters: usize, f: &mut dyn FnMut(f64) -> f64) -> (f64, f64) {
     let r = (5f64.sqrt() - 1.0) / 2.0;
     let (mut x1, mut x2) = (b - r * (b - a), a + r * (b - a));
     let (mut f1, mut f2) = (f(x1), f(x2));
