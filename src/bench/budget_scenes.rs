@@ -316,6 +316,7 @@ fn shear(quick: bool, hertz: bool) -> Result<World, String> {
         mpr: 0.11,
         restitution: RESTITUTION,
         seed: 1,
+        eq2_fixed_point: false,
     };
     let mut w = sheared_start(&spec, if quick { 1000 } else { 2000 })?;
     if hertz {

@@ -15,7 +15,7 @@
 //! - `integrate`: the half-kicks and the drift;
 //! - `neighbor_list` (with the cell list of `neighbor`): the skin test, list rebuilds and sorting;
 //! - `wall_pass` (with the search of `wall_contacts`): wall contacts and their forces;
-//! - `multicontact`: the radius changes of Eq. 2;
+//! - `multicontact`: the radius changes of Eq. 2 (iterated within the step by `mc_fixed_point`);
 //! - `pair_pass`: the pair forces by one of three strategies, evaluated by `pair_eval` into one
 //!   of the `sinks`;
 //! - `blocks` (with the timing `probe`): the threads' team and the pair blocks;
@@ -26,6 +26,7 @@ mod contacts;
 mod domain;
 mod integrate;
 mod mc_budget;
+mod mc_fixed_point;
 pub mod mesh;
 pub mod mesh_motion;
 mod multicontact;
@@ -47,6 +48,7 @@ pub use blocks::{PairThreads, THREAD_PROBE_STEPS};
 pub use contacts::PairContact;
 pub use domain::Domain;
 pub use mc_budget::{BudgetStats, DEFAULT_CHECK_EVERY, FLOOR_STRAIN, WHY as BUDGET_WHY};
+pub use mc_fixed_point::{FixedPoint, FixedPointStats};
 pub use mesh::Mesh;
 pub use mesh_motion::{Motion, Mover};
 pub use particles::{Particles, GROUP_ALL};

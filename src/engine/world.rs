@@ -10,6 +10,7 @@ use crate::team::Team;
 
 use super::blocks::{Blocks, PairThreads, StepTimer};
 use super::contacts::Contacts;
+use super::mc_fixed_point::{FixedPoint, FixedPointStats, FpScratch};
 use super::multicontact::{McState, McType};
 use super::neighbor_list::NeighborList;
 use super::pair_pass::PairScratch;
@@ -118,6 +119,11 @@ pub struct World {
     pub mc_accuracy_check: u64,
     /// Full multi-contact passes so far.
     pub mc_updates: u64,
+    /// Eq. 2 iterated to self-consistency within each step (`mc_fixed_point`); `None` (the
+    /// default): the paper's one-step lag, one force pass per step.
+    pub mc_fixed_point: Option<FixedPoint>,
+    /// What that iteration did since the counters were last zeroed.
+    pub mc_fp_stats: FixedPointStats,
     /// Spatial sorting (LAMMPS `atom_modify sort`): at the first neighbour build at least this
     /// many steps after the last sort, particles are renumbered bin by bin in row-major order, so
     /// that particles close in space are close in memory and the pair loop stays in cache as N
@@ -137,6 +143,7 @@ pub struct World {
     pub(super) lists: NeighborList,
     pub(super) blocks: Blocks,
     pub(super) pair_scratch: PairScratch,
+    pub(super) fp_scratch: FpScratch,
     /// The timer of a step split at its pre-force point ([`World::step_to_pre_force`]).
     pub(super) step_timer: Option<StepTimer>,
 }
@@ -161,6 +168,13 @@ impl World {
         }
         if self.closure.is_none() {
             return Err("no pair_style gran defined before run".into());
+        }
+        if self.mc_fixed_point.is_some()
+            && (self.mc_every > 1 || self.mc_accuracy > 0.0 || self.mc_geometry_tolerance > 0.0)
+        {
+            return Err("the Eq. 2 fixed point evaluates the multi-contact pass exactly at every pass: \
+                        it does not combine with an update interval, an accuracy budget or a geometry tolerance"
+                .into());
         }
         if self.coeffs.len() != self.ntypes * self.ntypes {
             return Err("material properties missing (fix property/global youngsModulus, poissonsRatio, coefficientRestitution, coefficientFriction)".into());
@@ -300,11 +314,14 @@ impl World {
         }
         self.update_wall_contacts();
         let mc = self.closure == Some(Closure::MultiContact);
+        let threads = self.threads().map_or(1, Team::size);
+        let batched = self.batched();
+        if let Some(fp) = self.mc_fixed_point.filter(|_| mc && update) {
+            return self.fixed_point_passes(fp, threads, batched);
+        }
         if mc {
             self.multicontact()?;
         }
-        let threads = self.threads().map_or(1, Team::size);
-        let batched = self.batched();
         self.pair_pass(update, mc, threads, batched)?;
         self.wall_pass(update, threads, batched)
     }

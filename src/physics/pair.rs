@@ -71,7 +71,7 @@ impl fmt::Display for ContactError {
         match self {
             ContactError::OverlapBeyondRadius { overlap, radius } => write!(
                 f,
-                "overlap {overlap:.6e} m reached the particle radius {radius:.6e} m (contact law out of range: reduce the time step or the multi-contact prefactor)"
+                "overlap {overlap:.6e} m reached the particle radius {radius:.6e} m (contact law out of range: a time step too large for this contact, or a compression beyond what the law can hold; a stop that stays when the time step is halved is the law's)"
             ),
             ContactError::CoincidentCentres => {
                 write!(f, "coincident centres: the contact normal is undefined")

@@ -11,6 +11,7 @@ mod against_liggghts;
 mod cohesion_hysteresis;
 mod conservation;
 mod deck;
+mod eq2_fixed_point;
 mod groups_lattice;
 mod insert;
 mod mc_advanced;

@@ -23,6 +23,8 @@ pub struct Grid {
     /// MPR of Eq. 3 for every ν; None: from the recorded calibration, as γ.
     pub mpr: Option<f64>,
     pub restitution: f64,
+    /// Every run with Eq. 2 iterated to its fixed point within the step ([`RunSpec::eq2_fixed_point`]).
+    pub eq2_fixed_point: bool,
     pub protocol: Protocol,
     /// Cost-vs-N measurement: sizes and shear steps timed per size (empty: none).
     pub cost_sizes: Vec<usize>,
@@ -42,6 +44,7 @@ impl Grid {
             gamma_mc: None,
             mpr: None,
             restitution: RESTITUTION,
+            eq2_fixed_point: false,
             protocol: Protocol::quick(),
             cost_sizes: vec![250, 500, 1000, 2000],
             cost_steps: 300,
@@ -60,6 +63,7 @@ impl Grid {
             gamma_mc: None,
             mpr: None,
             restitution: RESTITUTION,
+            eq2_fixed_point: false,
             protocol: Protocol::full(),
             cost_sizes: vec![500, 2000, 8000, 20000],
             cost_steps: 500,
@@ -94,6 +98,7 @@ impl Grid {
                             mpr,
                             restitution: self.restitution,
                             seed: 1,
+                            eq2_fixed_point: self.eq2_fixed_point,
                         });
                     }
                 }

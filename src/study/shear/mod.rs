@@ -36,8 +36,8 @@ pub use jamming::{
 pub use paper::{paper_values, PAPER_ALPHA, PAPER_BETA, PAPER_MU, PAPER_NU};
 pub use protocol::{
     classify, classify_from, k_n, run_one, run_one_from, run_refined, sheared_start, time_step, time_unit,
-    Protocol, RunResult, RunSpec, Stop, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, OUT_OF_RANGE,
-    PHI_START, RESTITUTION, SKIN, YOUNGS_MODULUS,
+    Protocol, RunResult, RunSpec, Stop, DENSITY, DIAMETER, DT_OVERLAP, DT_PER_CONTACT, FP_PASSES,
+    FP_TOLERANCE, OUT_OF_RANGE, PHI_START, RESTITUTION, SKIN, YOUNGS_MODULUS,
 };
 pub use recorded_stop::recorded_stop;
 pub use runs::{run, Summary};

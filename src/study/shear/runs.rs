@@ -189,7 +189,18 @@ pub(super) fn cost_rows(opts: &Options, say: &(dyn Fn(&str) + Sync)) -> Result<V
             // Report only: what was measured before, nothing new.
             continue;
         }
-        let spec = RunSpec { phi, mu, nu, gamma_hat, n, gamma_mc, mpr, restitution: g.restitution, seed: 7 };
+        let spec = RunSpec {
+            phi,
+            mu,
+            nu,
+            gamma_hat,
+            n,
+            gamma_mc,
+            mpr,
+            restitution: g.restitution,
+            seed: 7,
+            eq2_fixed_point: g.eq2_fixed_point,
+        };
         let row = single_thread(|| -> Result<CostRow, String> {
             // Both worlds side by side, timed in alternating chunks so that a slow spell of a
             // shared machine hits both; at least 2e6 particle-steps each, so small N is timed
