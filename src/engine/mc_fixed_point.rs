@@ -66,8 +66,10 @@ pub struct FixedPointStats {
     pub most_passes: u32,
     /// Steps that used all their passes without converging (the last iterate stands).
     pub unconverged: u64,
-    /// Steps whose last pass changed an Eq. 3 decision (a contact switched between Hertz and the
-    /// corrected law): the law is discontinuous there and may have no fixed point at all.
+    /// Unconverged steps whose last pass changed an Eq. 3 decision (a contact switched between
+    /// Hertz and the corrected law): the law is discontinuous there and may have no fixed point at
+    /// all. The other unconverged steps are mostly a contact opening and closing between passes,
+    /// the map's other discontinuity.
     pub switched: u64,
     /// Loop gain estimates (ratio of successive corrections, signed by whether they point the same
     /// way, at the last pass of a step that took three or more): the largest and the smallest.

@@ -420,3 +420,54 @@ fn stop_classification_follows_the_time_step_refinement() {
     let coincident = Stop { contact: Some(ContactError::CoincidentCentres), ..radius(0.30) };
     assert!(!coincident.is_overlap_limit() && radius(0.30).is_overlap_limit());
 }
+
+/// The cost of Eq. 2 at its fixed point against the lagged scheme, side by side in one process, on
+/// 2000 particles from the same compressed packing (recorded in
+/// `validation/recorded/shear_eq2_fixed_point/cost.txt`; timings are printed, not asserted).
+#[test]
+#[ignore]
+fn eq2_fixed_point_cost() {
+    use mcdem::engine::PairThreads;
+    use std::time::Instant;
+    for (phi, mu) in [(0.85, 1.0), (0.7, 0.5)] {
+        let (gamma_mc, mpr) = Grid::full().law(0.5).unwrap();
+        let spec = RunSpec {
+            phi,
+            mu,
+            nu: 0.5,
+            gamma_hat: 1e-2,
+            n: 2000,
+            gamma_mc,
+            mpr,
+            restitution: 0.7,
+            seed: 1,
+            eq2_fixed_point: false,
+        };
+        let mut rate = [0.0; 2];
+        for (k, fixed_point) in [false, true].into_iter().enumerate() {
+            let mut w = sheared_start(&spec, Protocol::full().compress_steps).unwrap();
+            w.pair_threads = PairThreads::Serial;
+            if fixed_point {
+                w.mc_fixed_point = Some(FixedPoint::new(FP_PASSES, FP_TOLERANCE, 1.0).unwrap());
+            }
+            let t = Instant::now();
+            for _ in 0..300 {
+                w.step().unwrap();
+            }
+            let st = w.mc_fp_stats;
+            rate[k] = 2000.0 * 300.0 / t.elapsed().as_secs_f64();
+            println!(
+                "phi {phi} mu {mu}: fixed point {fixed_point}: {:.3e} particle-steps/s, {:.2} passes/step \
+                 (most {}), {} steps unconverged ({} with an Eq. 3 switch flipping), gain {:+.3} … {:+.3}",
+                rate[k],
+                st.passes as f64 / st.steps.max(1) as f64,
+                st.most_passes,
+                st.unconverged,
+                st.switched,
+                st.gain_min,
+                st.gain_max
+            );
+        }
+        println!("phi {phi} mu {mu}: lagged / fixed point = {:.1}", rate[0] / rate[1]);
+    }
+}
