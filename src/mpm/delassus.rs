@@ -9,7 +9,8 @@
 //! non-negative, C being the inverse of a symmetric positive definite matrix). The
 //! Signorini–Coulomb problem on that linear model is solved by projected Gauss–Seidel over the
 //! contacts, each update using the step 1/λ_max(W_cc) (a bound of the local block's largest
-//! eigenvalue), which makes every update non-expansive; the bodies are then re-solved under the new
+//! eigenvalue), which makes every update non-expansive, or for a frictionless contact its one normal
+//! unknown solved for its own gap and over-relaxed; the bodies are then re-solved under the new
 //! forces, which corrects the linearisation.
 //!
 //! Why not the nodal masses alone (Eqs. 6–7 as written): m/Δt² is the local stiffness only while
@@ -50,6 +51,9 @@ struct Link<const D: usize> {
     /// The local block W_cc and the update's stiffness 1/λ_max(W_cc) (0: the node cannot move).
     w: Mat<D>,
     k: f64,
+    /// A frictionless body–body link: the normal step 1/(nᵀ W_cc n), the exact Gauss–Seidel
+    /// update of its one unknown (0 otherwise).
+    kn: f64,
     r: Vector<D>,
     /// The force the last body solve was made with.
     r_used: Vector<D>,
@@ -116,6 +120,7 @@ impl<const D: usize> Delassus<D> {
                 friction: copt.body_friction,
                 w: Mat::<D>::zeros(),
                 k: 0.0,
+                kn: 0.0,
                 r: c.r,
                 r_used: c.r,
             });
@@ -155,6 +160,7 @@ impl<const D: usize> Delassus<D> {
                     friction,
                     w: Mat::<D>::zeros(),
                     k: 0.0,
+                    kn: 0.0,
                     r,
                     r_used: r,
                 });
@@ -205,11 +211,17 @@ impl<const D: usize> Delassus<D> {
             let lmax = (0..D).map(|i| (0..D).map(|j| w[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
             self.links[c].w = w;
             self.links[c].k = if lmax > 0.0 { 1.0 / lmax } else { 0.0 };
+            if l.a.is_some() && l.friction == 0.0 {
+                let wnn = l.n.dot(&(w * l.n));
+                self.links[c].kn = if wnn > 0.0 { 1.0 / wnn } else { 0.0 };
+            }
         }
 
         // Projected Gauss–Seidel on the linear model, to well below the outer tolerance.
         let tol = 1e-3 * copt.tolerance * bodies[0].grid.h;
-        for _sweep in 0..MAX_SWEEPS {
+        let mut sweeps = 0;
+        for _ in 0..MAX_SWEEPS {
+            sweeps += 1;
             let mut change: f64 = 0.0;
             for c in 0..self.links.len() {
                 let l = self.links[c];
@@ -220,7 +232,11 @@ impl<const D: usize> Delassus<D> {
                 if let Some(a) = l.a {
                     g -= self.displacement(a);
                 }
-                let new = if l.a.is_none() {
+                let new = if l.kn > 0.0 {
+                    // Frictionless: the normal force alone, over-relaxed past the exact update for
+                    // its own gap (projected SOR; see OMEGA).
+                    l.n * (l.r.dot(&l.n) - OMEGA * g.dot(&l.n) * l.kn).max(0.0)
+                } else if l.a.is_none() {
                     // The wall moves along its normal only: the tangential displacement is the slip.
                     let p = Mat::<D>::identity() - l.n * l.n.transpose();
                     project_disc(p * (l.r - g * l.k), l.friction)
@@ -256,12 +272,13 @@ impl<const D: usize> Delassus<D> {
                 })
                 .unwrap_or(0);
             let l = self.links[worst];
+            let nlinks = self.links.len();
             let mass = |s: Side| {
                 let t = self.terms[s.start];
                 (s.body, s.len, ws[s.body].mass_dof[self.nodes[s.body][t.0] * D])
             };
             eprintln!(
-                "  step {step} contact: corr {corr:.3e} at link {worst} (body, terms, first mass) {:?} {:?} n {:?} r_used {:?} r {:?} W {:?}",
+                "  step {step} contact: {nlinks} links, {sweeps} sweeps, corr {corr:.3e} at link {worst} (body, terms, first mass) {:?} {:?} n {:?} r_used {:?} r {:?} W {:?}",
                 l.a.map(mass),
                 mass(l.b),
                 l.n.as_slice(),
@@ -345,3 +362,10 @@ impl<const D: usize> Delassus<D> {
 /// contact nodes of body b; the cap is reached only when the linear problem is nearly singular,
 /// and the outer loop then goes on from the forces reached.
 const MAX_SWEEPS: usize = 20_000;
+/// Over-relaxation of the frictionless links' normal update. The exact update of one unknown
+/// (ω = 1, projected Gauss–Seidel) already takes larger steps than the Gershgorin step of the block
+/// (up to D times); projected SOR converges for 0 < ω < 2 on this symmetric positive semi-definite
+/// problem and, measured on 100-disc compactions (150 steps at λ = 0, 3, 100 MPa), needs 2.5–4.1×
+/// fewer sweeps in total at ω = 1.7 than at ω = 1 (1.5: 1.5–2.5×; the Gershgorin step: 1.3× more
+/// than ω = 1 at λ = 100 MPa), and leaves 3 of 600 updates at the sweep cap against 22.
+const OMEGA: f64 = 1.7;

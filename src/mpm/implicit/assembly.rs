@@ -3,10 +3,10 @@
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat, Triplet};
 use faer::Mat as FMat;
 
-use super::{DofState, Locking, Workspace};
+use super::{DofState, Locking, Pattern, Workspace};
 use crate::mpm::constitutive::{det, Constitutive, Law};
 use crate::mpm::fbar::fbar_stiffness;
 use crate::mpm::grid::{incremental_gradient, Stencil};
@@ -296,11 +296,32 @@ pub(in crate::mpm) fn factorize<const D: usize>(
     if ws.pw.enabled {
         super::point_walls::add_tangent(ws);
     }
-    let k = SparseColMat::<usize, f64>::try_new_from_triplets(ndof, ndof, &ws.trip)
+    // The pattern (the triplets' positions, in order) stays the same over a step's Newton
+    // iterations and re-solves, and often over steps: its sort, compressed structure and symbolic
+    // LU are kept and reused while it does (bit for bit what building them again gives).
+    let same = ws.pattern.as_ref().is_some_and(|c| {
+        c.idx.len() == ws.trip.len()
+            && c.idx.iter().zip(&ws.trip).all(|(p, t)| p.row == t.row && p.col == t.col)
+    });
+    if !same {
+        if let Some(old) = ws.pattern.take() {
+            ws.pattern_idx = old.idx;
+        }
+        let mut idx = std::mem::take(&mut ws.pattern_idx);
+        idx.clear();
+        idx.extend(ws.trip.iter().map(|t| Pair { row: t.row, col: t.col }));
+        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(ndof, ndof, &idx)
+            .map_err(|e| format!("step {step}: cannot assemble the stiffness matrix: {e:?}"))?;
+        let lu = SymbolicLu::try_new(symbolic.as_ref())
+            .map_err(|e| format!("step {step}: sparse LU (symbolic) failed: {e:?}"))?;
+        ws.pattern = Some(Pattern { idx, symbolic, argsort, lu });
+    }
+    let c = ws.pattern.as_ref().expect("set above");
+    ws.vals.clear();
+    ws.vals.extend(ws.trip.iter().map(|t| t.val));
+    let k = SparseColMat::new_from_argsort(c.symbolic.clone(), &c.argsort, &ws.vals)
         .map_err(|e| format!("step {step}: cannot assemble the stiffness matrix: {e:?}"))?;
-    let sym = SymbolicLu::try_new(k.symbolic())
-        .map_err(|e| format!("step {step}: sparse LU (symbolic) failed: {e:?}"))?;
-    let lu = Lu::try_new_with_symbolic(sym, k.as_ref())
+    let lu = Lu::try_new_with_symbolic(c.lu.clone(), k.as_ref())
         .map_err(|e| format!("step {step}: sparse LU failed: {e:?}"))?;
     ws.lu = Some(lu);
     Ok(())

@@ -29,8 +29,8 @@ pub(super) use newton::solve;
 pub(super) use point_walls::add_loads as add_point_wall_loads;
 pub(super) use transfer::prepare;
 
-use faer::sparse::linalg::solvers::Lu;
-use faer::sparse::Triplet;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{Argsort, Pair, SymbolicSparseColMat, Triplet};
 
 use super::constitutive::{Constitutive, Law, Mat, Tangent};
 use super::fbar::FBarState;
@@ -148,6 +148,16 @@ pub(super) enum DofState {
     Fixed(f64),
 }
 
+/// A Newton matrix's sparsity pattern: the triplets' positions in assembly order, the compressed
+/// structure with the order its values are read in, and the symbolic LU.
+#[derive(Clone, Debug)]
+pub(super) struct Pattern {
+    pub(super) idx: Vec<Pair<usize, usize>>,
+    pub(super) symbolic: SymbolicSparseColMat<usize>,
+    pub(super) argsort: Argsort<usize>,
+    pub(super) lu: SymbolicLu<usize>,
+}
+
 /// Buffers of a step, kept between steps so that the loops do not allocate.
 #[derive(Clone, Debug, Default)]
 pub struct Workspace<const D: usize> {
@@ -181,6 +191,11 @@ pub struct Workspace<const D: usize> {
     pub(super) energy_ref: Option<f64>,
     /// LU factorization of the last assembled Newton matrix (the contact solver's compliance).
     pub(super) lu: Option<Lu<usize, f64>>,
+    /// The last Newton matrix's sparsity pattern with its symbolic analysis (`factorize`), the
+    /// spare index buffer of the next one, and the values in triplet order.
+    pub(super) pattern: Option<Pattern>,
+    pub(super) pattern_idx: Vec<Pair<usize, usize>>,
+    pub(super) vals: Vec<f64>,
     /// The walls' corner constraints on the points (`WallsOn::Points`).
     pub(super) pw: point_walls::PointWalls,
 }
