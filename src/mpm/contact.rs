@@ -37,6 +37,14 @@ use super::implicit::{
     add_point_wall_loads, finish, prepare, solve, Body, DofState, StepOptions, Wall, Workspace,
 };
 
+/// Iterations without a new low of the contact correction after which an attempt is taken as
+/// cycling. Measured on 100-disc compactions (λ = 0, 3, 100 MPa; 662 steps traced): every step
+/// that converges does so in at most 7 iterations, and its correction never goes more than one
+/// iteration without a new low; the steps whose nodal contact has no fixed point repeat a cycle of
+/// period 2 (or 4 in the quick compaction) exactly, and used to spend all of `max_iter` (500) on it
+/// before the sliver-node attempt converged in 4.
+const STALL: usize = 30;
+
 /// What one multi-body step reports.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ContactReport {
@@ -292,7 +300,7 @@ fn try_step<const D: usize>(
         ..Default::default()
     };
     let limit = copt.tolerance * h;
-    let mut converged = false;
+    let (mut converged, mut stalled) = (false, false);
     // First every contact acts on its node. Where that has no fixed point the iterations cycle
     // (a sliver node snapping between two states of its body, `contact_share`): the step is then
     // solved again from the start with the contacts of the sliver nodes acting through the
@@ -322,6 +330,10 @@ fn try_step<const D: usize>(
                 ft.fill(0.0);
             }
         }
+        // A correction that has not found a new low in STALL iterations is cycling (the nodal
+        // attempt without a fixed point): stop the attempt there rather than at `max_iter`.
+        let (mut best, mut since_best) = (f64::INFINITY, 0);
+        stalled = false;
         for it in 1..=copt.max_iter {
             report.iterations += 1;
             // Contact forces into Eq. 4 as external nodal forces, then each body's implicit solve.
@@ -366,6 +378,15 @@ fn try_step<const D: usize>(
                 converged = true;
                 break;
             }
+            if corr < best {
+                (best, since_best) = (corr, 0);
+            } else {
+                since_best += 1;
+                if since_best >= STALL {
+                    stalled = true;
+                    break;
+                }
+            }
         }
         if converged {
             break;
@@ -373,8 +394,9 @@ fn try_step<const D: usize>(
     }
     if !converged {
         return Err(format!(
-            "step {step}: contact iterations did not converge in {} iterations (also with the sliver nodes' contacts on their material): a force update still moves a node by {:.3e} m (criterion {:.1e} × h = {limit:.3e} m); reduce Δt",
-            copt.max_iter, report.correction, copt.tolerance
+            "step {step}: contact iterations did not converge {} (also with the sliver nodes' contacts on their material): a force update still moves a node by {:.3e} m (criterion {:.1e} × h = {limit:.3e} m); reduce Δt",
+            if stalled { format!("(no new low of the correction in {STALL} iterations)") } else { format!("in {} iterations", copt.max_iter) },
+            report.correction, copt.tolerance
         ).into());
     }
     // The last solve is within the tolerance of the final forces: report its loads, move points.
