@@ -144,15 +144,15 @@ impl World {
             self.wall_pass(true, threads, batched)?;
             passes += 1;
             let mut toggled = 0usize;
+            let plain = |d: &[f64; 2]| u8::from(d[0] == 0.0) | u8::from(d[1] == 0.0) << 1;
             let c = &self.contacts;
             if passes == 1 {
                 s.plain.clear();
-                s.plain.extend(c.pair_dr.iter().map(|d| u8::from(d[0] == 0.0) | u8::from(d[1] == 0.0) << 1));
+                s.plain.extend(c.pair_dr.iter().map(plain));
             } else {
                 for (b, d) in s.plain.iter_mut().zip(&c.pair_dr) {
-                    let now = u8::from(d[0] == 0.0) | u8::from(d[1] == 0.0) << 1;
-                    toggled += usize::from(now != *b);
-                    *b = now;
+                    toggled += usize::from(plain(d) != *b);
+                    *b = plain(d);
                 }
             }
             // This pass's correction per contact, its largest entry against the largest force,
