@@ -178,6 +178,40 @@ pub fn sphere_octant(r: f64, n: usize) -> Mesh {
 }
 
 impl Mesh {
+    /// The mirror image in the plane x_axis = `about`; each hexahedron's bottom and top faces are
+    /// swapped so that it stays right-handed.
+    pub fn mirrored(&self, axis: usize, about: f64) -> Mesh {
+        let x = self
+            .x
+            .iter()
+            .map(|p| {
+                let mut q = *p;
+                q[axis] = 2.0 * about - q[axis];
+                q
+            })
+            .collect();
+        let hex = self.hex.iter().map(|h| [h[4], h[5], h[6], h[7], h[0], h[1], h[2], h[3]]).collect();
+        Mesh { x, hex }
+    }
+
+    /// Moved rigidly by `by`.
+    pub fn translated(&self, by: [f64; 3]) -> Mesh {
+        Mesh {
+            x: self.x.iter().map(|p| [p[0] + by[0], p[1] + by[1], p[2] + by[2]]).collect(),
+            hex: self.hex.clone(),
+        }
+    }
+
+    /// This mesh and `other` as one (disconnected bodies); `other`'s nodes follow this mesh's.
+    pub fn joined(&self, other: &Mesh) -> Mesh {
+        let off = self.x.len();
+        let mut x = self.x.clone();
+        x.extend_from_slice(&other.x);
+        let mut hex = self.hex.clone();
+        hex.extend(other.hex.iter().map(|h| h.map(|i| i + off)));
+        Mesh { x, hex }
+    }
+
     /// Volume by the 2×2×2 Gauss rule (exact for trilinear elements' Jacobians of this degree).
     pub fn volume(&self) -> Result<f64, String> {
         let mut v = 0.0;

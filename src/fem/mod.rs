@@ -19,6 +19,7 @@ pub mod mesh;
 pub mod octant;
 pub mod scene;
 pub mod solver;
+pub mod surface;
 
 pub use element::{Law, Volumetric};
 pub use octant::{Point, SphereRun, Walls};

@@ -131,6 +131,7 @@ impl SphereRun {
             vol: self.vol,
             fixed,
             planes,
+            pairs: Vec::new(),
         }
     }
 
@@ -159,7 +160,7 @@ impl SphereRun {
                     let ratio = (next - at) / d_prev;
                     let trial: Vec<f64> =
                         state.u.iter().zip(u_prev).map(|(u, v)| u + ratio * (u - v)).collect();
-                    if solver.energy(&p, &trial).is_some() {
+                    if solver.energy(&p, &trial, &state.multiplier).is_some() {
                         state.u = trial;
                     }
                 }

@@ -16,6 +16,7 @@ use faer::{Mat, Side};
 use super::element::{self, Geometry, Law, Output, Volumetric};
 use super::material::Lame;
 use super::mesh::Mesh;
+use super::surface::SurfacePair;
 
 /// A rigid frictionless plane normal to `axis` at `pos`; `upper`: the body stays at x_axis ≤ pos.
 #[derive(Clone, Copy, Debug)]
@@ -35,6 +36,8 @@ pub struct Problem {
     /// Prescribed displacement components (dof = 3 node + axis, value).
     pub fixed: Vec<(usize, f64)>,
     pub planes: Vec<Plane>,
+    /// Frictionless contacts between bodies of the mesh (`surface`); empty for one body.
+    pub pairs: Vec<SurfacePair>,
 }
 
 /// Solver settings.
@@ -53,11 +56,13 @@ impl Default for Settings {
     }
 }
 
-/// Displacements and the contact active set (one flag per node and plane).
+/// Displacements, the contact active set (one flag per node and plane) and the multipliers λ [Pa]
+/// of the body–body contacts (one per slave node of each pair).
 #[derive(Clone, Debug)]
 pub struct State {
     pub u: Vec<f64>,
     pub active: Vec<Vec<bool>>,
+    pub multiplier: Vec<Vec<f64>>,
 }
 
 /// What a converged solve reports.
@@ -67,6 +72,11 @@ pub struct Equilibrium {
     pub plane_force: Vec<f64>,
     /// Per plane, the number of nodes in contact.
     pub contact_nodes: Vec<usize>,
+    /// Per body–body pair, the force on the slave body [N] and its number of slave nodes in contact.
+    pub pair_force: Vec<[f64; 3]>,
+    pub pair_nodes: Vec<usize>,
+    /// Per pair, the largest penetration left [m] (≤ its gap tolerance).
+    pub pair_penetration: Vec<f64>,
     pub iterations: usize,
     pub residual: f64,
 }
@@ -85,6 +95,11 @@ pub struct Solver {
 
 fn gather(mesh: &Mesh, e: usize, u: &[f64]) -> [[f64; 3]; 8] {
     mesh.hex[e].map(|n| [u[3 * n], u[3 * n + 1], u[3 * n + 2]])
+}
+
+/// Current position of a node.
+fn current(mesh: &Mesh, u: &[f64], n: usize) -> [f64; 3] {
+    [mesh.x[n][0] + u[3 * n], mesh.x[n][1] + u[3 * n + 1], mesh.x[n][2] + u[3 * n + 2]]
 }
 
 impl Solver {
@@ -110,6 +125,20 @@ impl Solver {
                 }
             }
         }
+        for pair in &p.pairs {
+            for (i, cands) in pair.candidates.iter().enumerate() {
+                for &m in cands {
+                    let dofs = pair.dofs(i, m);
+                    for &gr in &dofs {
+                        for &gc in &dofs {
+                            if gr >= gc {
+                                idx.push(Pair { row: gr, col: gc });
+                            }
+                        }
+                    }
+                }
+            }
+        }
         for d in 0..n {
             idx.push(Pair { row: d, col: d });
         }
@@ -130,17 +159,28 @@ impl Solver {
 
     /// A state at rest with no contact.
     pub fn rest(&self, p: &Problem) -> State {
-        State { u: vec![0.0; 3 * p.mesh.x.len()], active: vec![vec![false; p.mesh.x.len()]; p.planes.len()] }
+        State {
+            u: vec![0.0; 3 * p.mesh.x.len()],
+            active: vec![vec![false; p.mesh.x.len()]; p.planes.len()],
+            multiplier: p.pairs.iter().map(|pair| vec![0.0; pair.slave.len()]).collect(),
+        }
     }
 
-    /// Total energy, or `None` if an element is inverted.
-    pub fn energy(&self, p: &Problem, u: &[f64]) -> Option<f64> {
+    /// Total energy (strain energy plus the body–body contacts' augmented-Lagrangian terms under the
+    /// multipliers `multiplier`), or `None` if an element is inverted.
+    pub fn energy(&self, p: &Problem, u: &[f64], multiplier: &[Vec<f64>]) -> Option<f64> {
         let mut out = Output::default();
         let mut w = 0.0;
         for e in 0..p.mesh.hex.len() {
             element::evaluate(p.law, &p.lame, p.vol, &self.geo[e], &gather(&p.mesh, e, u), false, &mut out)
                 .ok()?;
             w += out.energy;
+        }
+        let pos = |node: usize| current(&p.mesh, u, node);
+        for (pair, lam) in p.pairs.iter().zip(multiplier) {
+            for i in 0..pair.slave.len() {
+                w += pair.energy(i, lam[i], pair.gap(i, &pos).g);
+            }
         }
         Some(w)
     }
@@ -196,6 +236,7 @@ impl Solver {
         &mut self,
         p: &Problem,
         u: &[f64],
+        multiplier: &[Vec<f64>],
         bc: &[Option<f64>],
     ) -> Result<(Vec<f64>, Vec<f64>), String> {
         let n = u.len();
@@ -218,6 +259,39 @@ impl Solver {
                     }
                     if ga >= gb {
                         self.vals.push(if bc[ga].is_none() && bc[gb].is_none() { kab } else { 0.0 });
+                    }
+                }
+            }
+        }
+        // Body–body contacts: gradient A p ∂g (with sign −), Gauss–Newton tangent A k ∂g ∂gᵀ on the
+        // face the node lies against; the other candidate faces' pattern entries get zeros.
+        let pos = |node: usize| current(&p.mesh, u, node);
+        for (pair, lam) in p.pairs.iter().zip(multiplier) {
+            for (i, cands) in pair.candidates.iter().enumerate() {
+                let gap = pair.gap(i, &pos);
+                let pressure = pair.pressure(lam[i], gap.g);
+                let grad = SurfacePair::gap_gradient(&gap);
+                let scale = pair.area[i] * pair.penalty;
+                for &m in cands {
+                    let dofs = pair.dofs(i, m);
+                    let on = m == gap.face && pressure > 0.0;
+                    if on {
+                        for a in 0..15 {
+                            r[dofs[a]] -= pair.area[i] * pressure * grad[a];
+                        }
+                    }
+                    for a in 0..15 {
+                        let ga = dofs[a];
+                        for b in 0..15 {
+                            let gb = dofs[b];
+                            let kab = if on { scale * grad[a] * grad[b] } else { 0.0 };
+                            if bc[ga].is_none() && bc[gb].is_some() {
+                                rhs[ga] -= kab * du_c[gb];
+                            }
+                            if ga >= gb {
+                                self.vals.push(if bc[ga].is_none() && bc[gb].is_none() { kab } else { 0.0 });
+                            }
+                        }
                     }
                 }
             }
@@ -274,7 +348,7 @@ impl Solver {
         let mut last = f64::NAN;
         for it in 0..set.max_iter {
             Self::targets(p, s, &mut bc);
-            let (r, du) = self.newton_direction(p, &s.u, &bc)?;
+            let (r, du) = self.newton_direction(p, &s.u, &s.multiplier, &bc)?;
             let moving = (0..n).any(|d| bc[d].is_some_and(|t| t != s.u[d]));
             let reaction = (0..n).filter(|&d| bc[d].is_some()).map(|d| r[d].abs()).fold(0.0, f64::max);
             let res = (0..n).filter(|&d| bc[d].is_none()).map(|d| r[d].abs()).fold(0.0, f64::max);
@@ -298,6 +372,33 @@ impl Solver {
                         }
                     }
                 }
+                // Uzawa: the pressures become the multipliers until every contacting slave node
+                // is within its pair's gap tolerance of the master surface.
+                let pos = |node: usize| current(&p.mesh, &s.u, node);
+                let mut pair_force = Vec::new();
+                let mut pair_nodes = Vec::new();
+                let mut pair_penetration = Vec::new();
+                for (pair, lam) in p.pairs.iter().zip(s.multiplier.iter_mut()) {
+                    let (mut force, mut nodes, mut deepest) = ([0.0; 3], 0, 0.0f64);
+                    for i in 0..pair.slave.len() {
+                        let gap = pair.gap(i, &pos);
+                        let pr = pair.pressure(lam[i], gap.g);
+                        if pr > 0.0 {
+                            nodes += 1;
+                            deepest = deepest.max(-gap.g);
+                            for k in 0..3 {
+                                force[k] += pair.area[i] * pr * gap.nu[k];
+                            }
+                        }
+                        if pr != lam[i] && (gap.g.abs() > pair.gap_tolerance || pr == 0.0) {
+                            lam[i] = pr;
+                            changed = true;
+                        }
+                    }
+                    pair_force.push(force);
+                    pair_nodes.push(nodes);
+                    pair_penetration.push(deepest);
+                }
                 if !changed {
                     let mut plane_force = Vec::new();
                     let mut contact_nodes = Vec::new();
@@ -311,13 +412,21 @@ impl Solver {
                         );
                         contact_nodes.push(s.active[k].iter().filter(|&&a| a).count());
                     }
-                    return Ok(Equilibrium { plane_force, contact_nodes, iterations: it, residual: res });
+                    return Ok(Equilibrium {
+                        plane_force,
+                        contact_nodes,
+                        pair_force,
+                        pair_nodes,
+                        pair_penetration,
+                        iterations: it,
+                        residual: res,
+                    });
                 }
                 continue;
             }
             // Line search: the full step unless it inverts an element or (once the constrained
             // dofs are on target) fails to lower the energy (Armijo, c = 1e-4).
-            let e0 = if moving { None } else { self.energy(p, &s.u) };
+            let e0 = if moving { None } else { self.energy(p, &s.u, &s.multiplier) };
             let slope: f64 = (0..n).map(|d| r[d] * du[d]).sum();
             let mut alpha = 1.0;
             let mut trial = vec![0.0; n];
@@ -325,7 +434,7 @@ impl Solver {
                 for d in 0..n {
                     trial[d] = s.u[d] + alpha * du[d];
                 }
-                match (self.energy(p, &trial), e0) {
+                match (self.energy(p, &trial, &s.multiplier), e0) {
                     (Some(_), None) => break,
                     // The energy is a sum over all elements: near convergence its round-off (~1e-11
                     // relative) exceeds the decrease a Newton step can make, which must not count as failure.
