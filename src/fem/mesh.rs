@@ -70,10 +70,25 @@ pub fn cuboid(l: [f64; 3], n: [usize; 3], shift: f64) -> Mesh {
     Mesh { x, hex }
 }
 
+/// Where the octant's surface intervals are refined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Grading {
+    /// Towards the poles on the axes (s, t → 0): the contacts of a sphere between walls.
+    Poles,
+    /// Towards the poles and towards the diagonal (1, 1, 1) where three blocks meet (s, t → 1):
+    /// each half of the range graded like `Poles`, for the contact along a bcc cell's diagonal.
+    PolesAndDiagonal,
+}
+
 /// One octant of the sphere of radius `r`, centred at the origin, with `n` intervals along each
 /// cube edge and each block's surface edge and `n` radial layers per block. Level ℓ of the
 /// studies is n = 4·2^{ℓ−1}.
 pub fn sphere_octant(r: f64, n: usize) -> Mesh {
+    sphere_octant_graded(r, n, Grading::Poles)
+}
+
+/// [`sphere_octant`] with a choice of [`Grading`]; `PolesAndDiagonal` needs an even `n`.
+pub fn sphere_octant_graded(r: f64, n: usize, grading: Grading) -> Mesh {
     let c = 0.5 * r;
     let m = n;
     let mut x = Vec::new();
@@ -85,7 +100,11 @@ pub fn sphere_octant(r: f64, n: usize) -> Mesh {
             x.len() - 1
         })
     };
-    let gn = |i: usize| grade(i as f64 / n as f64);
+    let gn = |i: usize| match grading {
+        Grading::Poles => grade(i as f64 / n as f64),
+        Grading::PolesAndDiagonal if 2 * i <= n => 0.5 * grade(2.0 * i as f64 / n as f64),
+        Grading::PolesAndDiagonal => 1.0 - 0.5 * grade(2.0 * (n - i) as f64 / n as f64),
+    };
     let mut hex = Vec::new();
     // Inner cube.
     let mut cube = vec![0usize; (n + 1).pow(3)];
@@ -200,6 +219,38 @@ impl Mesh {
             x: self.x.iter().map(|p| [p[0] + by[0], p[1] + by[1], p[2] + by[2]]).collect(),
             hex: self.hex.clone(),
         }
+    }
+
+    /// Nodes closer than `tol` in every coordinate merged into one (the first of them kept), so
+    /// that mirrored copies of a mesh joined along their common plane form one body.
+    pub fn welded(&self, tol: f64) -> Mesh {
+        use std::collections::HashMap;
+        let key = |p: &[f64; 3]| p.map(|v| (v / tol).round() as i64);
+        let mut first: HashMap<[i64; 3], usize> = HashMap::new();
+        let mut map = vec![0; self.x.len()];
+        let mut x = Vec::new();
+        for (i, p) in self.x.iter().enumerate() {
+            map[i] = *first.entry(key(p)).or_insert_with(|| {
+                x.push(*p);
+                x.len() - 1
+            });
+        }
+        Mesh { x, hex: self.hex.iter().map(|h| h.map(|i| map[i])).collect() }
+    }
+
+    /// The whole sphere from one octant centred at the origin: its eight mirror images, welded.
+    pub fn whole_from_octant(&self, tol: f64) -> Mesh {
+        let mut all = self.clone();
+        for mask in 1..8 {
+            let mut m = self.clone();
+            for axis in 0..3 {
+                if mask & (1 << axis) != 0 {
+                    m = m.mirrored(axis, 0.0);
+                }
+            }
+            all = all.joined(&m);
+        }
+        all.welded(tol)
     }
 
     /// This mesh and `other` as one (disconnected bodies); `other`'s nodes follow this mesh's.

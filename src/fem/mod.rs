@@ -13,6 +13,7 @@
 // notation of the formulas they implement does; iterator chains would hide that correspondence.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bcc;
 pub mod element;
 pub mod material;
 pub mod mesh;

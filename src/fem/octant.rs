@@ -13,7 +13,7 @@
 use super::element::{Law, Volumetric};
 use super::material::Lame;
 use super::mesh::{sphere_octant, Mesh};
-use super::solver::{Plane, Problem, Settings, Solver, State};
+use super::solver::{Equilibrium, Plane, Problem, Settings, Solver, State};
 
 /// Which walls surround the sphere.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,68 +135,91 @@ impl SphereRun {
         }
     }
 
-    /// Runs the load path. Each interval between reported points is one load step, halved on
-    /// non-convergence down to 1/256 of it; `progress` sees every reported point.
+    /// Runs the load path (`load_path`); `progress` sees every reported point.
     pub fn run(&self, mut progress: impl FnMut(&Point)) -> Result<Vec<Point>, String> {
         self.check()?;
         let mut p = self.problem();
-        let mut solver = Solver::new(&p)?;
-        let mut state: State = solver.rest(&p);
-        let set = Settings::default();
         let area = 4.0 * self.radius * self.radius;
-        let mut at = 0.0;
         let mut out = Vec::new();
-        let mut last: Option<(Vec<f64>, f64)> = None;
-        for &target in &self.delta_over_r {
-            let mut step = target - at;
-            let min_step = step / 256.0;
-            while at < target - 1e-12 {
-                let next = (at + step).min(target);
-                let saved = state.clone();
-                // Secant predictor: continue the last increment's displacement field, which keeps
-                // the thin graded surface layer from being crushed by the contact nodes alone;
-                // dropped if it would invert an element.
-                if let Some((u_prev, d_prev)) = &last {
-                    let ratio = (next - at) / d_prev;
-                    let trial: Vec<f64> =
-                        state.u.iter().zip(u_prev).map(|(u, v)| u + ratio * (u - v)).collect();
-                    if solver.energy(&p, &trial, &state.multiplier).is_some() {
-                        state.u = trial;
+        let what =
+            format!("{} intervals per edge, {:?}, nu = {}", self.intervals, self.law, self.poisson_ratio);
+        load_path(
+            &mut p,
+            &Settings::default(),
+            &self.delta_over_r,
+            &what,
+            |p, next| p.planes[0].pos = self.radius * (1.0 - 0.5 * next),
+            |_, eq, target| {
+                let side = if self.walls == Walls::Die { 4.0 * eq.plane_force[1] } else { 0.0 };
+                let pt = Point {
+                    delta_over_r: target,
+                    plate_force: 4.0 * eq.plane_force[0],
+                    side_force: side,
+                    plate_stress: 4.0 * eq.plane_force[0] / area,
+                    side_stress: side / area,
+                    plate_nodes: eq.contact_nodes[0],
+                    side_nodes: if self.walls == Walls::Die { eq.contact_nodes[1] } else { 0 },
+                };
+                progress(&pt);
+                out.push(pt);
+            },
+        )?;
+        Ok(out)
+    }
+}
+
+/// Quasi-static load path through the plate approaches Δ/r `targets` (increasing):
+/// `apply(problem, Δ/r)` sets one, `report(problem, equilibrium, target)` sees the equilibrium at each target. Each interval
+/// between targets is one load step, halved on non-convergence down to 1/256 of it; `what` names
+/// the run in the error.
+pub fn load_path(
+    p: &mut Problem,
+    set: &Settings,
+    targets: &[f64],
+    what: &str,
+    mut apply: impl FnMut(&mut Problem, f64),
+    mut report: impl FnMut(&Problem, &Equilibrium, f64),
+) -> Result<(), String> {
+    let mut solver = Solver::new(p)?;
+    let mut state: State = solver.rest(p);
+    let mut at = 0.0;
+    let mut last: Option<(Vec<f64>, f64)> = None;
+    for &target in targets {
+        let mut step = target - at;
+        let min_step = step / 256.0;
+        while at < target - 1e-12 {
+            let next = (at + step).min(target);
+            let saved = state.clone();
+            // Secant predictor: continue the last increment's displacement field, which keeps
+            // the thin graded surface layer from being crushed by the contact nodes alone;
+            // dropped if it would invert an element.
+            if let Some((u_prev, d_prev)) = &last {
+                let ratio = (next - at) / d_prev;
+                let trial: Vec<f64> = state.u.iter().zip(u_prev).map(|(u, v)| u + ratio * (u - v)).collect();
+                if solver.energy(p, &trial, &state.multiplier).is_some() {
+                    state.u = trial;
+                }
+            }
+            apply(p, next);
+            match solver.solve(p, &mut state, set) {
+                Ok(eq) => {
+                    last = Some((saved.u, next - at));
+                    at = next;
+                    if (at - target).abs() < 1e-12 {
+                        report(p, &eq, target);
                     }
                 }
-                p.planes[0].pos = self.radius * (1.0 - 0.5 * next);
-                match solver.solve(&p, &mut state, &set) {
-                    Ok(eq) => {
-                        last = Some((saved.u, next - at));
-                        at = next;
-                        if (at - target).abs() < 1e-12 {
-                            let side = if self.walls == Walls::Die { 4.0 * eq.plane_force[1] } else { 0.0 };
-                            let pt = Point {
-                                delta_over_r: target,
-                                plate_force: 4.0 * eq.plane_force[0],
-                                side_force: side,
-                                plate_stress: 4.0 * eq.plane_force[0] / area,
-                                side_stress: side / area,
-                                plate_nodes: eq.contact_nodes[0],
-                                side_nodes: if self.walls == Walls::Die { eq.contact_nodes[1] } else { 0 },
-                            };
-                            progress(&pt);
-                            out.push(pt);
-                        }
-                    }
-                    Err(e) => {
-                        state = saved;
-                        step *= 0.5;
-                        if step < min_step {
-                            return Err(format!(
-                                "no equilibrium between delta/r = {at:.5} and {target:.5} even with 1/256 of the step ({} intervals per edge, {:?}, nu = {}): {e}",
-                                self.intervals, self.law, self.poisson_ratio
-                            ));
-                        }
+                Err(e) => {
+                    state = saved;
+                    step *= 0.5;
+                    if step < min_step {
+                        return Err(format!(
+                            "no equilibrium between delta/r = {at:.5} and {target:.5} even with 1/256 of the step ({what}): {e}"
+                        ));
                     }
                 }
             }
         }
-        Ok(out)
     }
+    Ok(())
 }

@@ -48,11 +48,17 @@ pub struct Settings {
     pub rtol: f64,
     pub atol: f64,
     pub max_iter: usize,
+    /// Proximal-point regularisation κ in units of E L (0: none). Each Newton solve then minimises
+    /// Π(u) + κ |u − a|²/2 about an anchor a, which moves to the solution until the proximal force
+    /// κ |u − a| is within the tolerance: the equilibrium found is Π's own, the problems on the
+    /// way are well conditioned. For a body held only by frictionless contacts (a sphere's rigid
+    /// rotations cost nothing while its patches are single nodes).
+    pub proximal: f64,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { rtol: 1e-9, atol: 1e-13, max_iter: 60 }
+        Settings { rtol: 1e-9, atol: 1e-13, max_iter: 60, proximal: 0.0 }
     }
 }
 
@@ -238,6 +244,7 @@ impl Solver {
         u: &[f64],
         multiplier: &[Vec<f64>],
         bc: &[Option<f64>],
+        prox: Option<(&[f64], f64)>,
     ) -> Result<(Vec<f64>, Vec<f64>), String> {
         let n = u.len();
         let mut r = vec![0.0; n];
@@ -296,8 +303,14 @@ impl Solver {
                 }
             }
         }
+        let kappa = prox.map_or(0.0, |(_, k)| k);
+        if let Some((anchor, k)) = prox {
+            for d in (0..n).filter(|&d| bc[d].is_none()) {
+                r[d] += k * (u[d] - anchor[d]);
+            }
+        }
         for d in 0..n {
-            self.vals.push(if bc[d].is_some() { 1.0 } else { 0.0 });
+            self.vals.push(if bc[d].is_some() { 1.0 } else { kappa });
             rhs[d] = if bc[d].is_some() { du_c[d] } else { rhs[d] - r[d] };
         }
         let k = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &self.vals)
@@ -345,14 +358,24 @@ impl Solver {
         let n = s.u.len();
         let mut bc = vec![None; n];
         let floor = set.atol * self.modulus * self.length * self.length;
+        let kappa = set.proximal * self.modulus * self.length;
+        let mut anchor = s.u.clone();
         let mut last = f64::NAN;
         for it in 0..set.max_iter {
             Self::targets(p, s, &mut bc);
-            let (r, du) = self.newton_direction(p, &s.u, &s.multiplier, &bc)?;
+            let prox = (kappa > 0.0).then_some((anchor.as_slice(), kappa));
+            let (r, du) = self.newton_direction(p, &s.u, &s.multiplier, &bc, prox)?;
             let moving = (0..n).any(|d| bc[d].is_some_and(|t| t != s.u[d]));
             let reaction = (0..n).filter(|&d| bc[d].is_some()).map(|d| r[d].abs()).fold(0.0, f64::max);
             let res = (0..n).filter(|&d| bc[d].is_none()).map(|d| r[d].abs()).fold(0.0, f64::max);
             last = res;
+            if std::env::var_os("MCDEM_FEM_TRACE").is_some() {
+                let worst =
+                    (0..n).filter(|&d| bc[d].is_none()).max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()));
+                eprintln!(
+                    "newton {it}: free residual {res:.3e} N at dof {worst:?}, reaction {reaction:.3e} N, constrained dofs moving: {moving}"
+                );
+            }
             if !moving && res <= (set.rtol * reaction).max(floor) {
                 // Converged for this active set: release nodes the plane would pull, admit any
                 // node that penetrates; done when neither happens.
@@ -399,6 +422,17 @@ impl Solver {
                     pair_nodes.push(nodes);
                     pair_penetration.push(deepest);
                 }
+                // Proximal point: re-anchor until the regularisation carries no force.
+                if kappa > 0.0 {
+                    let pull = (0..n)
+                        .filter(|&d| bc[d].is_none())
+                        .map(|d| kappa * (s.u[d] - anchor[d]).abs())
+                        .fold(0.0, f64::max);
+                    if pull > (set.rtol * reaction).max(floor) {
+                        anchor.copy_from_slice(&s.u);
+                        changed = true;
+                    }
+                }
                 if !changed {
                     let mut plane_force = Vec::new();
                     let mut contact_nodes = Vec::new();
@@ -426,7 +460,17 @@ impl Solver {
             }
             // Line search: the full step unless it inverts an element or (once the constrained
             // dofs are on target) fails to lower the energy (Armijo, c = 1e-4).
-            let e0 = if moving { None } else { self.energy(p, &s.u, &s.multiplier) };
+            let proximal_energy = |u: &[f64]| {
+                (0..n)
+                    .filter(|&d| bc[d].is_none())
+                    .map(|d| 0.5 * kappa * (u[d] - anchor[d]).powi(2))
+                    .sum::<f64>()
+            };
+            let e0 = if moving {
+                None
+            } else {
+                self.energy(p, &s.u, &s.multiplier).map(|e| e + proximal_energy(&s.u))
+            };
             let slope: f64 = (0..n).map(|d| r[d] * du[d]).sum();
             let mut alpha = 1.0;
             let mut trial = vec![0.0; n];
@@ -434,7 +478,7 @@ impl Solver {
                 for d in 0..n {
                     trial[d] = s.u[d] + alpha * du[d];
                 }
-                match (self.energy(p, &trial, &s.multiplier), e0) {
+                match (self.energy(p, &trial, &s.multiplier).map(|e| e + proximal_energy(&trial)), e0) {
                     (Some(_), None) => break,
                     // The energy is a sum over all elements: near convergence its round-off (~1e-11
                     // relative) exceeds the decrease a Newton step can make, which must not count as failure.

@@ -261,3 +261,37 @@ fn two_spheres_pressed_together_match_one_sphere_against_a_plane() {
         "non-matching meshes, levels 1, 2: {errs:?}"
     );
 }
+
+/// The bcc cell's set-up (`fem::bcc`: the corner sphere whole, held only by frictionless contacts,
+/// and the centre sphere's octant) at its first load step, Δ/r = 0.02, Neo-Hookean ν = 0.45, 4
+/// intervals: the corner sphere is in equilibrium under the plate, the two side walls and the
+/// centre sphere, so in the octant the plate force (a quarter of the die's) balances the contact's
+/// z component and each side wall its x and y components. The bound 1e-3 is ten times the Newton
+/// tolerance of the bcc runs (1e-4 of the largest reaction). The diagonal chain loads the plate
+/// and the side walls alike (measured 0.351 and 0.359 Pa, the DEM's 0.36 and 0.30 Pa at ν = 0.5).
+#[test]
+fn bcc_corner_sphere_is_in_equilibrium_at_the_first_load_step() {
+    use mcdem::fem::bcc::BccRun;
+    let run = BccRun {
+        radius: 1e-3,
+        youngs_modulus: 23.3e3,
+        poisson_ratio: 0.45,
+        law: Law::NeoHookean,
+        vol: Volumetric::MeanDilatation,
+        intervals: 4,
+        delta_over_r: vec![0.02],
+    };
+    let pt = run.run(|_| {}).unwrap()[0];
+    let quarter = |f: f64| f / 4.0;
+    for (wall, along, what) in [
+        (quarter(pt.plate_force), pt.contact[2], "plate / z"),
+        (quarter(pt.side_force), pt.contact[0], "side / x"),
+    ] {
+        let rel = (wall + along) / wall;
+        assert!(
+            wall > 0.0 && rel.abs() < 1e-3,
+            "{what}: wall {wall:e} N, contact component {along:e} N ({rel:+e})"
+        );
+    }
+    assert!(pt.contact_nodes >= 3 && pt.plate_nodes >= 1 && pt.side_nodes >= 1, "{pt:?}");
+}
