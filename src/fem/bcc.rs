@@ -16,7 +16,6 @@
 //! The meshes are graded towards the poles (the wall contacts) and towards the diagonal (the
 //! corner–centre contact), `mesh::Grading::PolesAndDiagonal`.
 
-use super::element::{Law, Volumetric};
 use super::material::Lame;
 use super::mesh::{sphere_octant_graded, Grading};
 use super::octant::{load_path, SphereRun, Walls};
@@ -37,18 +36,12 @@ const PROXIMAL: f64 = 1e-9;
 /// forces by about as much, far below the meshes' discretisation error (percent).
 const RTOL: f64 = 1e-4;
 
-/// Specification of one bcc run.
+/// Specification of one bcc run: the spheres, mesh and load path of a die run (`walls` must be
+/// `Die`; `intervals` even, the grading refines both ends of each edge; `delta_over_r` the
+/// top-plate travel).
 #[derive(Clone, Debug)]
 pub struct BccRun {
-    pub radius: f64,
-    pub youngs_modulus: f64,
-    pub poisson_ratio: f64,
-    pub law: Law,
-    pub vol: Volumetric,
-    /// Intervals per octant block edge (even: the grading refines both ends of each edge).
-    pub intervals: usize,
-    /// Top-plate travel Δ/r at which the forces are reported, increasing.
-    pub delta_over_r: Vec<f64>,
+    pub spec: SphereRun,
 }
 
 /// One reported point of the bcc cell.
@@ -72,26 +65,19 @@ pub struct BccPoint {
 impl BccRun {
     /// Side of the die, L = 2r (1 + 2/√3): the corner spheres touch the centre one.
     pub fn side(&self) -> f64 {
-        2.0 * self.radius * (1.0 + 2.0 / 3f64.sqrt())
+        2.0 * self.spec.radius * (1.0 + 2.0 / 3f64.sqrt())
     }
 
     /// Checks the inputs; every message names the offending field.
     pub fn check(&self) -> Result<(), String> {
-        SphereRun {
-            radius: self.radius,
-            youngs_modulus: self.youngs_modulus,
-            poisson_ratio: self.poisson_ratio,
-            law: self.law,
-            vol: self.vol,
-            intervals: self.intervals,
-            walls: Walls::Die,
-            delta_over_r: self.delta_over_r.clone(),
+        self.spec.check()?;
+        if self.spec.walls != Walls::Die {
+            return Err("the bcc cell is a die: walls must be die".into());
         }
-        .check()?;
-        if self.intervals % 2 != 0 {
+        if self.spec.intervals % 2 != 0 {
             return Err(format!(
                 "mesh intervals per block edge must be even for the bcc cell (graded at both ends), got {}",
-                self.intervals
+                self.spec.intervals
             ));
         }
         Ok(())
@@ -100,9 +86,9 @@ impl BccRun {
     /// The boundary-value problem at zero load: the corner sphere's nodes first, then the centre
     /// octant's.
     pub fn problem(&self) -> Result<Problem, String> {
-        let (r, half) = (self.radius, 0.5 * self.side());
+        let (r, half) = (self.spec.radius, 0.5 * self.side());
         let tol = 1e-9 * r;
-        let octant = sphere_octant_graded(r, self.intervals, Grading::PolesAndDiagonal);
+        let octant = sphere_octant_graded(r, self.spec.intervals, Grading::PolesAndDiagonal);
         let corner = octant.whole_from_octant(tol).translated([r, r, r]);
         let centre = octant.mirrored(0, 0.0).mirrored(1, 0.0).mirrored(2, 0.0).translated([half; 3]);
         let mesh = corner.joined(&centre);
@@ -122,15 +108,22 @@ impl BccRun {
             .filter(|f| !(0..3).any(|k| f.iter().all(|&i| on_cut(&mesh.x[i], k))))
             .collect();
         let d = -1.0 / 3f64.sqrt();
-        let pair =
-            SurfacePair::new(&mesh, &slave, master, [d; 3], 0.5 * r, self.youngs_modulus, PENALTY_FACTOR)
-                .map_err(|e| format!("bcc corner-centre contact: {e}"))?;
+        let pair = SurfacePair::new(
+            &mesh,
+            &slave,
+            master,
+            [d; 3],
+            0.5 * r,
+            self.spec.youngs_modulus,
+            PENALTY_FACTOR,
+        )
+        .map_err(|e| format!("bcc corner-centre contact: {e}"))?;
         let plane = |axis, pos, upper| Plane { axis, pos, upper };
         Ok(Problem {
             mesh,
-            law: self.law,
-            lame: Lame::from_e_nu(self.youngs_modulus, self.poisson_ratio),
-            vol: self.vol,
+            law: self.spec.law,
+            lame: Lame::from_e_nu(self.spec.youngs_modulus, self.spec.poisson_ratio),
+            vol: self.spec.vol,
             fixed,
             // Plate, the two side walls, then the mid-planes (the corner sphere's mirror images).
             planes: vec![
@@ -150,17 +143,17 @@ impl BccRun {
         self.check()?;
         let mut p = self.problem()?;
         let area = self.side() * self.side();
-        let r = self.radius;
+        let r = self.spec.radius;
         let set = Settings { proximal: PROXIMAL, max_iter: 300, rtol: RTOL, ..Settings::default() };
         let what = format!(
             "bcc cell, {} intervals per edge, {:?}, nu = {}",
-            self.intervals, self.law, self.poisson_ratio
+            self.spec.intervals, self.spec.law, self.spec.poisson_ratio
         );
         let mut out = Vec::new();
         load_path(
             &mut p,
             &set,
-            &self.delta_over_r,
+            &self.spec.delta_over_r,
             &what,
             |p, next| p.planes[0].pos = 0.5 * next * r,
             |_, eq, target| {

@@ -273,13 +273,16 @@ fn two_spheres_pressed_together_match_one_sphere_against_a_plane() {
 fn bcc_corner_sphere_is_in_equilibrium_at_the_first_load_step() {
     use mcdem::fem::bcc::BccRun;
     let run = BccRun {
-        radius: 1e-3,
-        youngs_modulus: 23.3e3,
-        poisson_ratio: 0.45,
-        law: Law::NeoHookean,
-        vol: Volumetric::MeanDilatation,
-        intervals: 4,
-        delta_over_r: vec![0.02],
+        spec: SphereRun {
+            radius: 1e-3,
+            youngs_modulus: 23.3e3,
+            poisson_ratio: 0.45,
+            law: Law::NeoHookean,
+            vol: Volumetric::MeanDilatation,
+            intervals: 4,
+            walls: Walls::Die,
+            delta_over_r: vec![0.02],
+        },
     };
     let pt = run.run(|_| {}).unwrap()[0];
     let quarter = |f: f64| f / 4.0;
