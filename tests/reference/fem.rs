@@ -268,7 +268,8 @@ fn two_spheres_pressed_together_match_one_sphere_against_a_plane() {
 /// centre sphere, so in the octant the plate force (a quarter of the die's) balances the contact's
 /// z component and each side wall its x and y components. The bound 1e-3 is ten times the Newton
 /// tolerance of the bcc runs (1e-4 of the largest reaction). The diagonal chain loads the plate
-/// and the side walls alike (measured 0.351 and 0.359 Pa, the DEM's 0.36 and 0.30 Pa at ν = 0.5).
+/// and the side walls alike (measured 0.351 and 0.359 Pa; the DEM laws give 0.42–0.44 Pa on both
+/// at ν = 0.5).
 #[test]
 fn bcc_corner_sphere_is_in_equilibrium_at_the_first_load_step() {
     use mcdem::fem::bcc::BccRun;
