@@ -53,9 +53,8 @@ pub struct BccPoint {
     pub side_force: f64,
     pub plate_stress: f64,
     pub side_stress: f64,
-    /// Force of one corner–centre contact on the corner sphere [N], and its magnitude.
+    /// Force of one corner–centre contact on the corner sphere [N].
     pub contact: [f64; 3],
-    pub contact_force: f64,
     /// Nodes of the octant in contact with the plate, the x side wall, and the centre sphere.
     pub plate_nodes: usize,
     pub side_nodes: usize,
@@ -156,16 +155,14 @@ impl BccRun {
             &self.spec.delta_over_r,
             &what,
             |p, next| p.planes[0].pos = 0.5 * next * r,
-            |_, eq, target| {
-                let f = eq.pair_force[0];
+            |eq, target| {
                 let pt = BccPoint {
                     delta_over_r: target,
                     plate_force: 4.0 * eq.plane_force[0],
                     side_force: 4.0 * eq.plane_force[1],
                     plate_stress: 4.0 * eq.plane_force[0] / area,
                     side_stress: 4.0 * eq.plane_force[1] / area,
-                    contact: f,
-                    contact_force: (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt(),
+                    contact: eq.pair_force[0],
                     plate_nodes: eq.contact_nodes[0],
                     side_nodes: eq.contact_nodes[1],
                     contact_nodes: eq.pair_nodes[0],

@@ -149,7 +149,7 @@ impl SphereRun {
             &self.delta_over_r,
             &what,
             |p, next| p.planes[0].pos = self.radius * (1.0 - 0.5 * next),
-            |_, eq, target| {
+            |eq, target| {
                 let side = if self.walls == Walls::Die { 4.0 * eq.plane_force[1] } else { 0.0 };
                 let pt = Point {
                     delta_over_r: target,
@@ -169,7 +169,7 @@ impl SphereRun {
 }
 
 /// Quasi-static load path through the plate approaches Δ/r `targets` (increasing):
-/// `apply(problem, Δ/r)` sets one, `report(problem, equilibrium, target)` sees the equilibrium at each target. Each interval
+/// `apply(problem, Δ/r)` sets one, `report(equilibrium, target)` sees the equilibrium at each target. Each interval
 /// between targets is one load step, halved on non-convergence down to 1/256 of it; `what` names
 /// the run in the error.
 pub fn load_path(
@@ -178,7 +178,7 @@ pub fn load_path(
     targets: &[f64],
     what: &str,
     mut apply: impl FnMut(&mut Problem, f64),
-    mut report: impl FnMut(&Problem, &Equilibrium, f64),
+    mut report: impl FnMut(&Equilibrium, f64),
 ) -> Result<(), String> {
     let mut solver = Solver::new(p)?;
     let mut state: State = solver.rest(p);
@@ -206,7 +206,7 @@ pub fn load_path(
                     last = Some((saved.u, next - at));
                     at = next;
                     if (at - target).abs() < 1e-12 {
-                        report(p, &eq, target);
+                        report(&eq, target);
                     }
                 }
                 Err(e) => {

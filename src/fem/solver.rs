@@ -281,17 +281,20 @@ impl Solver {
                 let scale = pair.area[i] * pair.penalty;
                 for &m in cands {
                     let dofs = pair.dofs(i, m);
-                    let on = m == gap.face && pressure > 0.0;
-                    if on {
-                        for a in 0..15 {
-                            r[dofs[a]] -= pair.area[i] * pressure * grad[a];
-                        }
+                    if !(m == gap.face && pressure > 0.0) {
+                        // Its pattern entries, in the order of `Solver::new`, hold zeros.
+                        let entries = dofs.iter().flat_map(|&ga| dofs.iter().filter(move |&&gb| ga >= gb));
+                        self.vals.extend(entries.map(|_| 0.0));
+                        continue;
+                    }
+                    for a in 0..15 {
+                        r[dofs[a]] -= pair.area[i] * pressure * grad[a];
                     }
                     for a in 0..15 {
                         let ga = dofs[a];
                         for b in 0..15 {
                             let gb = dofs[b];
-                            let kab = if on { scale * grad[a] * grad[b] } else { 0.0 };
+                            let kab = scale * grad[a] * grad[b];
                             if bc[ga].is_none() && bc[gb].is_some() {
                                 rhs[ga] -= kab * du_c[gb];
                             }

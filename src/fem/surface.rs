@@ -21,6 +21,7 @@
 //! search tolerates).
 
 use super::mesh::Mesh;
+use crate::physics::Vec3;
 
 /// Corner nodes of the six faces of a hexahedron (node order of `element::CORNERS`), each ordered
 /// counter-clockwise seen from outside the element, so (b − a) × (d − a) points outward.
@@ -43,16 +44,6 @@ pub fn boundary_faces(mesh: &Mesh, elems: impl Iterator<Item = usize>) -> Vec<[u
     let mut out: Vec<[usize; 4]> = count.into_values().filter(|v| v.1 == 1).map(|v| v.0).collect();
     out.sort_unstable();
     out
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 /// The gap of one slave node: its signed distance `g` [m] to the master surface along the pair's
@@ -101,40 +92,30 @@ impl SurfacePair {
         if master.is_empty() || slave_faces.is_empty() {
             return Err("surface contact: empty slave or master surface".into());
         }
-        let len = norm(direction);
+        let len = Vec3::from(direction).norm();
         if !(len > 0.0 && len.is_finite()) {
             return Err(format!("surface contact: direction {direction:?} has no length"));
         }
         let direction = direction.map(|v| v / len);
+        let at = |i: usize| Vec3::from(mesh.x[i]);
         // Tributary area: a quarter of each adjacent face's area.
         let mut area_of = std::collections::BTreeMap::<usize, f64>::new();
         for f in slave_faces {
-            let x = f.map(|i| mesh.x[i]);
-            let a = 0.5 * norm(cross(sub(x[2], x[0]), sub(x[3], x[1])));
+            let a = 0.5 * (at(f[2]) - at(f[0])).cross(&(at(f[3]) - at(f[1]))).norm();
             for &i in f {
                 *area_of.entry(i).or_insert(0.0) += 0.25 * a;
             }
         }
-        let centroid = |f: &[usize; 4]| {
-            let mut c = [0.0; 3];
-            for &i in f {
-                for k in 0..3 {
-                    c[k] += 0.25 * mesh.x[i][k];
-                }
-            }
-            c
-        };
-        let cents: Vec<[f64; 3]> = master.iter().map(centroid).collect();
+        let cents: Vec<Vec3> = master.iter().map(|f| f.iter().map(|&i| 0.25 * at(i)).sum()).collect();
         let mut h = f64::INFINITY;
         for f in &master {
             for k in 0..4 {
-                h = h.min(norm(sub(mesh.x[f[(k + 1) % 4]], mesh.x[f[k]])));
+                h = h.min((at(f[(k + 1) % 4]) - at(f[k])).norm());
             }
         }
         let (mut slave, mut area, mut candidates) = (Vec::new(), Vec::new(), Vec::new());
         for (&s, &a) in &area_of {
-            let c: Vec<usize> =
-                (0..master.len()).filter(|&m| norm(sub(cents[m], mesh.x[s])) <= reach).collect();
+            let c: Vec<usize> = (0..master.len()).filter(|&m| (cents[m] - at(s)).norm() <= reach).collect();
             if !c.is_empty() {
                 slave.push(s);
                 area.push(a);
@@ -223,33 +204,29 @@ impl SurfacePair {
 /// edge-on or from behind, or Newton does not settle (a face folded over the line).
 fn cross_bilinear(p: [f64; 3], d: [f64; 3], x: &[[f64; 3]; 4]) -> Option<(f64, [f64; 3], [f64; 4])> {
     const XI: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    let (p, d) = (Vec3::from(p), Vec3::from(d));
+    let x = x.map(Vec3::from);
     let (mut xi, mut eta, mut g) = (0.0f64, 0.0f64, 0.0f64);
     for _ in 0..30 {
         let n_a: [f64; 4] = std::array::from_fn(|a| 0.25 * (1.0 + XI[a][0] * xi) * (1.0 + XI[a][1] * eta));
-        let mut f = [0.0; 3];
-        let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
+        let mut f = g * d - p;
+        let (mut t1, mut t2) = (Vec3::zeros(), Vec3::zeros());
         for a in 0..4 {
-            let (dxi, deta) =
-                (0.25 * XI[a][0] * (1.0 + XI[a][1] * eta), 0.25 * XI[a][1] * (1.0 + XI[a][0] * xi));
-            for k in 0..3 {
-                f[k] += n_a[a] * x[a][k];
-                t1[k] += dxi * x[a][k];
-                t2[k] += deta * x[a][k];
-            }
+            f += n_a[a] * x[a];
+            t1 += 0.25 * XI[a][0] * (1.0 + XI[a][1] * eta) * x[a];
+            t2 += 0.25 * XI[a][1] * (1.0 + XI[a][0] * xi) * x[a];
         }
-        for k in 0..3 {
-            f[k] += g * d[k] - p[k];
-        }
-        let n = cross(t1, t2);
-        let nd = dot(n, d);
-        if nd <= 1e-9 * norm(n) {
+        let n = t1.cross(&t2);
+        let nd = n.dot(&d);
+        if nd <= 1e-9 * n.norm() {
             return None;
         }
         // Cramer's rule on [t1 t2 d] (δξ, δη, δg) = −f.
-        let det = dot(t1, cross(t2, d));
-        let dxi = -dot(f, cross(t2, d)) / det;
-        let deta = -dot(t1, cross(f, d)) / det;
-        let dg = -dot(t1, cross(t2, f)) / det;
+        let t2_d = t2.cross(&d);
+        let det = t1.dot(&t2_d);
+        let dxi = -f.dot(&t2_d) / det;
+        let deta = -t1.dot(&f.cross(&d)) / det;
+        let dg = -t1.dot(&t2.cross(&f)) / det;
         xi += dxi;
         eta += deta;
         g += dg;
@@ -259,17 +236,13 @@ fn cross_bilinear(p: [f64; 3], d: [f64; 3], x: &[[f64; 3]; 4]) -> Option<(f64, [
             }
             let n_a: [f64; 4] =
                 std::array::from_fn(|a| 0.25 * (1.0 + XI[a][0] * xi) * (1.0 + XI[a][1] * eta));
-            return Some((g, n.map(|v| v / nd), n_a));
+            return Some((g, (n / nd).into(), n_a));
         }
         if xi.abs() > 3.0 || eta.abs() > 3.0 {
             return None;
         }
     }
     None
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 #[cfg(test)]
@@ -284,15 +257,15 @@ mod tests {
         let faces = boundary_faces(&mesh, 0..mesh.hex.len());
         assert_eq!(faces.len(), 24);
         for f in faces {
-            let x = f.map(|i| mesh.x[i]);
-            let n = cross(sub(x[1], x[0]), sub(x[3], x[0]));
-            let c: [f64; 3] = std::array::from_fn(|k| 0.25 * (x[0][k] + x[1][k] + x[2][k] + x[3][k]) - 1.0);
-            assert!(dot(n, c) > 0.0, "face {f:?} points inward");
+            let x = f.map(|i| Vec3::from(mesh.x[i]));
+            let n = (x[1] - x[0]).cross(&(x[3] - x[0]));
+            let c = 0.25 * (x[0] + x[1] + x[2] + x[3]) - Vec3::repeat(1.0);
+            assert!(n.dot(&c) > 0.0, "face {f:?} points inward");
         }
     }
 
     /// The gap's gradient against central differences of the gap itself, for nodes above, below
-    /// and beside the centre of a warped face (crossings in three of its four facets).
+    /// and beside the centre of a warped (non-planar) face.
     #[test]
     fn gap_gradient_matches_finite_differences() {
         let mesh = cuboid([1.0, 1.0, 0.5], [1, 1, 1], 0.0);
